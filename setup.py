@@ -1,0 +1,63 @@
+"""Build of the tamias2d extension modules.
+
+Every ``tamias2d/*.pyx`` is cythonized with one set of directives. The C flags
+keep floating-point arithmetic exactly as Munk2D compiled by pymunk does it: no
+fused multiply-add (``-ffp-contract=off``), no ``-ffast-math``, no
+``-march=native``.
+
+Environment:
+  TAMIAS2D_DEBUG=1       bounds and wraparound checks on, ``-O0 -g``.
+  TAMIAS2D_ONLY=a,b      build only the named modules (for working on one
+                         module while others are in progress).
+"""
+import glob
+import os
+import sys
+
+from setuptools import Extension, setup
+
+try:
+    from Cython.Build import cythonize
+except ImportError:  # pragma: no cover - pyproject lists Cython as a build requirement
+    sys.exit("tamias2d needs Cython >= 3.1 to build: pip install 'Cython>=3.1'")
+
+DEBUG = os.environ.get("TAMIAS2D_DEBUG", "") not in ("", "0")
+ONLY = [m for m in os.environ.get("TAMIAS2D_ONLY", "").split(",") if m]
+
+directives = {
+    "language_level": 3,
+    "boundscheck": DEBUG,
+    "wraparound": DEBUG,
+    "cdivision": True,
+    "embedsignature": True,
+    "initializedcheck": DEBUG,
+    "freethreading_compatible": True,
+}
+
+if sys.platform == "win32":
+    compile_args = ["/O2", "/fp:precise"]
+else:
+    compile_args = ["-O0", "-g"] if DEBUG else ["-O3"]
+    compile_args += ["-ffp-contract=off", "-fno-strict-aliasing", "-fwrapv"]
+
+extensions = []
+for path in sorted(glob.glob(os.path.join("tamias2d", "*.pyx"))):
+    name = os.path.splitext(os.path.basename(path))[0]
+    if ONLY and name not in ONLY:
+        continue
+    extensions.append(Extension(
+        "tamias2d." + name,
+        [path],
+        extra_compile_args=compile_args,
+        define_macros=[("CYTHON_TRACE", "0")],
+    ))
+
+setup(
+    ext_modules=cythonize(
+        extensions,
+        compiler_directives=directives,
+        include_path=["."],
+        annotate=DEBUG,
+        nthreads=0,
+    ),
+)

@@ -1,0 +1,11 @@
+"""tamias2d: a 2D rigid-body physics engine, a Cython port of Chipmunk2D.
+
+It follows Munk2D (the Chipmunk2D fork inside pymunk 7.3) closely enough that
+the same scene gives the same numbers, and offers pymunk's Python API, so
+``import tamias2d as pymunk`` runs a pymunk game script unchanged.
+"""
+version = "0.1.0"
+# The Chipmunk the port follows: Munk2D 2.0.1 as pymunk 7.3 compiles it.
+chipmunk_version = "2.0.1-tamias2d"
+
+from . import errors

@@ -1,0 +1,48 @@
+# Scalar types and the constants of the engine, as Munk2D's chipmunk_types.h
+# and chipmunk.h define them (double precision, 64-bit hash values).
+from libc.stdint cimport uintptr_t, uint32_t
+
+ctypedef double cpFloat
+ctypedef uintptr_t cpHashValue
+ctypedef uint32_t cpCollisionID
+ctypedef unsigned char cpBool
+ctypedef void *cpDataPointer
+ctypedef uintptr_t cpCollisionType
+ctypedef uintptr_t cpGroup
+ctypedef unsigned int cpBitmask
+ctypedef unsigned int cpTimestamp
+
+cdef extern from *:
+    """
+    /* The C compiler rounds these float literals exactly as Munk2D's sources do:
+       0.1f is 0.10000000149011612 once stored in a double. */
+    #define TAMIAS_FLOAT_0_1F ((double)0.1f)
+    #define TAMIAS_FLOAT_0_9F ((double)(1.0f - 0.1f))
+    """
+    const double TAMIAS_FLOAT_0_1F
+    const double TAMIAS_FLOAT_0_9F
+
+# chipmunk.h / chipmunk_private.h
+cdef enum:
+    CP_MAX_CONTACTS_PER_ARBITER = 2
+    CP_BUFFER_BYTES = 32 * 1024
+    CP_POLY_SHAPE_INLINE_ALLOC = 6
+    MAX_GJK_ITERATIONS = 30
+    MAX_EPA_ITERATIONS = 30
+    WARN_GJK_ITERATIONS = 20
+    WARN_EPA_ITERATIONS = 20
+
+cdef const cpHashValue CP_HASH_COEF = <cpHashValue>3344921057UL
+cdef const cpHashValue CP_HASH_COEF_ORDERED = <cpHashValue>1566083941UL
+cdef const cpBitmask CP_ALL_CATEGORIES = <cpBitmask>0xFFFFFFFFU
+cdef const cpGroup CP_NO_GROUP = 0
+cdef const cpCollisionType CP_WILDCARD_COLLISION_TYPE = <cpCollisionType>(-1)
+cdef const cpFloat MAGIC_EPSILON = 1e-5
+
+# CP_HASH_PAIR(A, B): symmetric, wraps modulo 2**64 as uintptr_t arithmetic does.
+cdef inline cpHashValue CP_HASH_PAIR(cpHashValue a, cpHashValue b) noexcept nogil:
+    return (a * CP_HASH_COEF) ^ (b * CP_HASH_COEF)
+
+# Munk2D's ordered variant, used for collision handler keys.
+cdef inline cpHashValue CP_HASH_PAIR_ORDERED(cpHashValue a, cpHashValue b) noexcept nogil:
+    return (a * CP_HASH_COEF) ^ (b * CP_HASH_COEF_ORDERED)

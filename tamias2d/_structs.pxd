@@ -1,0 +1,363 @@
+# The engine's C structures in one place, as Munk2D's chipmunk_structs.h keeps
+# them: bodies, shapes, arbiters and the space point at each other, so their
+# definitions cannot live in separate modules. Field names follow Munk2D so the
+# port can be read beside its source. Functions live in the module of their
+# struct (body.pxd, shape.pxd, collision.pxd, space.pxd, _bbtree.pxd, ...).
+from tamias2d._config cimport (cpFloat, cpHashValue, cpCollisionID, cpBool,
+    cpDataPointer, cpCollisionType, cpGroup, cpBitmask, cpTimestamp,
+    CP_MAX_CONTACTS_PER_ARBITER, CP_POLY_SHAPE_INLINE_ALLOC)
+from tamias2d.vector cimport cpVect, cpBB, cpTransform, cpMat2x2
+
+cdef struct cpBody
+cdef struct cpShape
+cdef struct cpArbiter
+cdef struct cpSpace
+cdef struct cpConstraint
+cdef struct cpSpatialIndex
+cdef struct cpContactBufferHeader
+
+# -- containers (cpArray.c, cpHashSet.c; functions in _containers.pxd) --------
+cdef struct cpArray:
+    int num
+    int max
+    void **arr
+
+ctypedef cpBool (*cpHashSetEqlFunc)(const void *ptr, const void *elt) noexcept nogil
+ctypedef void *(*cpHashSetTransFunc)(const void *ptr, void *data) noexcept nogil
+ctypedef void (*cpHashSetIteratorFunc)(void *elt, void *data) noexcept nogil
+ctypedef cpBool (*cpHashSetFilterFunc)(void *elt, void *data) noexcept nogil
+
+cdef struct cpHashSetBin:
+    void *elt
+    cpHashValue hash
+    cpHashSetBin *next
+
+cdef struct cpHashSet:
+    unsigned int entries
+    unsigned int size
+    cpHashSetEqlFunc eql
+    void *default_value
+    cpHashSetBin **table
+    cpHashSetBin *pooledBins
+    cpArray *allocatedBuffers
+
+# -- body (cpBody.c) ------------------------------------------------------------
+ctypedef void (*cpBodyVelocityFunc)(cpBody *body, cpVect gravity, cpFloat damping, cpFloat dt) noexcept nogil
+ctypedef void (*cpBodyPositionFunc)(cpBody *body, cpFloat dt) noexcept nogil
+
+cpdef enum cpBodyType:
+    CP_BODY_TYPE_DYNAMIC = 0
+    CP_BODY_TYPE_KINEMATIC = 1
+    CP_BODY_TYPE_STATIC = 2
+
+cdef struct cpBodySleeping:
+    cpBody *root
+    cpBody *next
+    cpFloat idleTime
+
+cdef struct cpBody:
+    cpBodyVelocityFunc velocity_func
+    cpBodyPositionFunc position_func
+    cpFloat m
+    cpFloat m_inv
+    cpFloat i
+    cpFloat i_inv
+    cpVect cog
+    cpVect p
+    cpVect v
+    cpVect f
+    cpFloat a
+    cpFloat w
+    cpFloat t
+    cpTransform transform
+    cpDataPointer userData      # borrowed pointer to the Python Body
+    cpVect v_bias
+    cpFloat w_bias
+    cpSpace *space
+    cpShape *shapeList
+    cpArbiter *arbiterList
+    cpConstraint *constraintList
+    cpBodySleeping sleeping
+
+# -- shapes (cpShape.c, cpPolyShape.c) ---------------------------------------------
+cdef struct cpShapeFilter:
+    cpGroup group
+    cpBitmask categories
+    cpBitmask mask
+
+cdef struct cpShapeMassInfo:
+    cpFloat m
+    cpFloat i        # moment per unit mass about the shape's own centroid
+    cpVect cog
+    cpFloat area
+
+cdef struct cpPointQueryInfo:
+    const cpShape *shape
+    cpVect point
+    cpFloat distance
+    cpVect gradient
+
+cdef struct cpSegmentQueryInfo:
+    const cpShape *shape
+    cpVect point
+    cpVect normal
+    cpFloat alpha
+
+cpdef enum cpShapeType:
+    CP_CIRCLE_SHAPE = 0
+    CP_SEGMENT_SHAPE = 1
+    CP_POLY_SHAPE = 2
+    CP_NUM_SHAPES = 3
+
+ctypedef cpBB (*cpShapeCacheDataImpl)(cpShape *shape, cpTransform transform) noexcept nogil
+ctypedef void (*cpShapeDestroyImpl)(cpShape *shape) noexcept nogil
+ctypedef void (*cpShapePointQueryImpl)(const cpShape *shape, cpVect p, cpPointQueryInfo *info) noexcept nogil
+ctypedef void (*cpShapeSegmentQueryImpl)(const cpShape *shape, cpVect a, cpVect b, cpFloat radius, cpSegmentQueryInfo *info) noexcept nogil
+
+cdef struct cpShapeClass:
+    cpShapeType type
+    cpShapeCacheDataImpl cacheData
+    cpShapeDestroyImpl destroy
+    cpShapePointQueryImpl pointQuery
+    cpShapeSegmentQueryImpl segmentQuery
+
+cdef struct cpShape:
+    const cpShapeClass *klass
+    cpSpace *space
+    cpBody *body
+    cpShapeMassInfo massInfo
+    cpBB bb
+    cpBool sensor
+    cpFloat e
+    cpFloat u
+    cpVect surfaceV
+    cpDataPointer userData      # borrowed pointer to the Python Shape
+    cpCollisionType type
+    cpShapeFilter filter
+    cpShape *next
+    cpShape *prev
+    cpHashValue hashid
+
+cdef struct cpCircleShape:
+    cpShape shape
+    cpVect c
+    cpVect tc
+    cpFloat r
+
+cdef struct cpSegmentShape:
+    cpShape shape
+    cpVect a
+    cpVect b
+    cpVect n
+    cpVect ta
+    cpVect tb
+    cpVect tn
+    cpFloat r
+    cpVect a_tangent
+    cpVect b_tangent
+
+cdef struct cpSplittingPlane:
+    cpVect v0
+    cpVect n
+
+cdef struct cpPolyShape:
+    cpShape shape
+    cpFloat r
+    int count
+    # planes[0:count] hold world data (refreshed by cacheData), planes[count:2*count]
+    # the local data. Points at _planes when count <= CP_POLY_SHAPE_INLINE_ALLOC,
+    # else at a malloc'd block freed by the class destroy hook.
+    cpSplittingPlane *planes
+    cpSplittingPlane _planes[2 * CP_POLY_SHAPE_INLINE_ALLOC]
+
+# -- narrow phase results (cpCollision.c) -----------------------------------------
+cdef struct cpContact:
+    cpVect r1
+    cpVect r2
+    cpFloat nMass
+    cpFloat tMass
+    cpFloat bounce
+    cpFloat jnAcc
+    cpFloat jtAcc
+    cpFloat jBias
+    cpFloat bias
+    cpHashValue hash
+
+cdef struct cpCollisionInfo:
+    const cpShape *a
+    const cpShape *b
+    cpCollisionID id
+    cpVect n
+    int count
+    cpContact *arr
+
+cdef struct cpContactPoint:
+    cpVect pointA
+    cpVect pointB
+    cpFloat distance
+
+cdef struct cpContactPointSet:
+    int count
+    cpVect normal
+    cpContactPoint points[CP_MAX_CONTACTS_PER_ARBITER]
+
+# -- arbiters and collision handlers (cpArbiter.c, cpSpace.c) -------------------
+ctypedef void (*cpCollisionBeginFunc)(cpArbiter *arb, cpSpace *space, cpDataPointer userData) noexcept nogil
+ctypedef void (*cpCollisionPreSolveFunc)(cpArbiter *arb, cpSpace *space, cpDataPointer userData) noexcept nogil
+ctypedef void (*cpCollisionPostSolveFunc)(cpArbiter *arb, cpSpace *space, cpDataPointer userData) noexcept nogil
+ctypedef void (*cpCollisionSeparateFunc)(cpArbiter *arb, cpSpace *space, cpDataPointer userData) noexcept nogil
+
+cdef struct cpCollisionHandler:
+    cpCollisionType typeA
+    cpCollisionType typeB
+    cpCollisionBeginFunc beginFunc
+    cpCollisionPreSolveFunc preSolveFunc
+    cpCollisionPostSolveFunc postSolveFunc
+    cpCollisionSeparateFunc separateFunc
+    cpDataPointer userData
+
+cpdef enum cpArbiterState:
+    CP_ARBITER_STATE_FIRST_COLLISION = 0
+    CP_ARBITER_STATE_NORMAL = 1
+    CP_ARBITER_STATE_IGNORE = 2
+    CP_ARBITER_STATE_CACHED = 3
+    CP_ARBITER_STATE_INVALIDATED = 4
+
+cdef struct cpArbiterThread:
+    cpArbiter *next
+    cpArbiter *prev
+
+cdef struct cpArbiter:
+    cpFloat e
+    cpFloat u
+    cpVect surface_vr
+    cpDataPointer data
+    const cpShape *a
+    const cpShape *b
+    cpBody *body_a
+    cpBody *body_b
+    cpArbiterThread thread_a
+    cpArbiterThread thread_b
+    int count
+    cpContact *contacts
+    cpVect n
+    cpCollisionHandler *handlerAB
+    cpCollisionHandler *handlerBA
+    cpCollisionHandler *handlerA
+    cpCollisionHandler *handlerB
+    cpBool swapped
+    cpTimestamp stamp
+    cpArbiterState state
+    cpBool processCollision
+
+# -- constraints (declared for the body lists; joints are not ported yet) -------
+ctypedef void (*cpConstraintPreStepImpl)(cpConstraint *constraint, cpFloat dt) noexcept nogil
+ctypedef void (*cpConstraintApplyCachedImpulseImpl)(cpConstraint *constraint, cpFloat dt_coef) noexcept nogil
+ctypedef void (*cpConstraintApplyImpulseImpl)(cpConstraint *constraint, cpFloat dt) noexcept nogil
+ctypedef cpFloat (*cpConstraintGetImpulseImpl)(cpConstraint *constraint) noexcept nogil
+ctypedef void (*cpConstraintPreSolveFunc)(cpConstraint *constraint, cpSpace *space) noexcept nogil
+ctypedef void (*cpConstraintPostSolveFunc)(cpConstraint *constraint, cpSpace *space) noexcept nogil
+
+cdef struct cpConstraintClass:
+    cpConstraintPreStepImpl preStep
+    cpConstraintApplyCachedImpulseImpl applyCachedImpulse
+    cpConstraintApplyImpulseImpl applyImpulse
+    cpConstraintGetImpulseImpl getImpulse
+
+cdef struct cpConstraint:
+    const cpConstraintClass *klass
+    cpSpace *space
+    cpBody *a
+    cpBody *b
+    cpConstraint *next_a
+    cpConstraint *next_b
+    cpFloat maxForce
+    cpFloat errorBias
+    cpFloat maxBias
+    cpBool collideBodies
+    cpConstraintPreSolveFunc preSolve
+    cpConstraintPostSolveFunc postSolve
+    cpDataPointer userData
+
+# -- spatial index interface (cpSpatialIndex.h; the BB tree is in _bbtree.pxd) --
+ctypedef cpBB (*cpSpatialIndexBBFunc)(void *obj) noexcept nogil
+ctypedef void (*cpSpatialIndexIteratorFunc)(void *obj, void *data) noexcept nogil
+ctypedef cpCollisionID (*cpSpatialIndexQueryFunc)(void *obj1, void *obj2, cpCollisionID id, void *data) noexcept nogil
+ctypedef cpFloat (*cpSpatialIndexSegmentQueryFunc)(void *obj1, void *obj2, void *data) noexcept nogil
+
+ctypedef void (*cpSpatialIndexDestroyImpl)(cpSpatialIndex *index) noexcept nogil
+ctypedef int (*cpSpatialIndexCountImpl)(cpSpatialIndex *index) noexcept nogil
+ctypedef void (*cpSpatialIndexEachImpl)(cpSpatialIndex *index, cpSpatialIndexIteratorFunc func, void *data) noexcept nogil
+ctypedef cpBool (*cpSpatialIndexContainsImpl)(cpSpatialIndex *index, void *obj, cpHashValue hashid) noexcept nogil
+ctypedef void (*cpSpatialIndexInsertImpl)(cpSpatialIndex *index, void *obj, cpHashValue hashid) noexcept nogil
+ctypedef void (*cpSpatialIndexRemoveImpl)(cpSpatialIndex *index, void *obj, cpHashValue hashid) noexcept nogil
+ctypedef void (*cpSpatialIndexReindexImpl)(cpSpatialIndex *index) noexcept nogil
+ctypedef void (*cpSpatialIndexReindexObjectImpl)(cpSpatialIndex *index, void *obj, cpHashValue hashid) noexcept nogil
+ctypedef void (*cpSpatialIndexReindexQueryImpl)(cpSpatialIndex *index, cpSpatialIndexQueryFunc func, void *data) noexcept nogil
+ctypedef void (*cpSpatialIndexQueryImpl)(cpSpatialIndex *index, void *obj, cpBB bb, cpSpatialIndexQueryFunc func, void *data) noexcept nogil
+ctypedef void (*cpSpatialIndexSegmentQueryImpl)(cpSpatialIndex *index, void *obj, cpVect a, cpVect b, cpFloat t_exit, cpSpatialIndexSegmentQueryFunc func, void *data) noexcept nogil
+
+cdef struct cpSpatialIndexClass:
+    cpSpatialIndexDestroyImpl destroy
+    cpSpatialIndexCountImpl count
+    cpSpatialIndexEachImpl each
+    cpSpatialIndexContainsImpl contains
+    cpSpatialIndexInsertImpl insert
+    cpSpatialIndexRemoveImpl remove
+    cpSpatialIndexReindexImpl reindex
+    cpSpatialIndexReindexObjectImpl reindexObject
+    cpSpatialIndexReindexQueryImpl reindexQuery
+    cpSpatialIndexQueryImpl query
+    cpSpatialIndexSegmentQueryImpl segmentQuery
+
+cdef struct cpSpatialIndex:
+    cpSpatialIndexClass *klass
+    cpSpatialIndexBBFunc bbfunc
+    cpSpatialIndex *staticIndex
+    cpSpatialIndex *dynamicIndex
+
+# -- space (cpSpace.c, cpSpaceStep.c) ---------------------------------------------
+ctypedef void (*cpPostStepFunc)(cpSpace *space, void *key, void *data) noexcept nogil
+
+cdef struct cpPostStepCallback:
+    cpPostStepFunc func
+    void *key
+    void *data
+
+cdef struct cpContactBufferHeader:
+    cpTimestamp stamp
+    cpContactBufferHeader *next
+    unsigned int numContacts
+
+cdef struct cpSpace:
+    int iterations
+    cpVect gravity
+    cpFloat damping
+    cpFloat idleSpeedThreshold
+    cpFloat sleepTimeThreshold
+    cpFloat collisionSlop
+    cpFloat collisionBias
+    cpTimestamp collisionPersistence
+    cpDataPointer userData      # borrowed pointer to the Python Space
+    cpTimestamp stamp
+    cpFloat curr_dt
+    cpArray *dynamicBodies
+    cpArray *staticBodies
+    cpArray *rousedBodies
+    cpArray *sleepingComponents
+    cpHashValue shapeIDCounter
+    cpSpatialIndex *staticShapes
+    cpSpatialIndex *dynamicShapes
+    cpArray *constraints
+    cpArray *arbiters
+    cpContactBufferHeader *contactBuffersHead
+    cpHashSet *cachedArbiters
+    cpArray *pooledArbiters
+    cpArray *allocatedBuffers
+    int locked
+    cpHashSet *collisionHandlers
+    cpCollisionHandler globalHandler
+    cpBool skipPostStep
+    cpArray *postStepCallbacks
+    cpBody *staticBody
+    cpBody _staticBody
