@@ -1,0 +1,93 @@
+# Collision Solver module (MIS section 10): the narrow phase of Munk2D
+# (cpCollision.c, cpRobust.c) and the contact impulse helpers that the solver
+# shares with the joints (chipmunk_private.h).
+#
+# C level: cpCollide is what the space calls for every candidate pair in its
+# step; cpShapesCollide is the one-shot query. Both run without the GIL and
+# never call into Python. Anything that Munk2D would assert about (an
+# internal error, a GJK/EPA run that needed many iterations) is recorded in
+# per-thread flags; the caller turns them into Python exceptions or warnings
+# after the C call has returned, with collision_check_flags().
+from tamias2d._config cimport cpFloat, cpHashValue, cpCollisionID, cpBool
+from tamias2d._structs cimport (cpBody, cpShape, cpContact, cpCollisionInfo,
+    cpContactPointSet)
+from tamias2d.vector cimport (cpVect, cpv, cpvadd, cpvsub, cpvneg, cpvmult,
+    cpvdot, cpvcross, cpvperp)
+
+# -- contact impulse helpers (chipmunk_private.h) ------------------------------
+# Same expressions and association as Munk2D, so the solver gives the same bits.
+
+cdef inline cpVect relative_velocity(cpBody *a, cpBody *b, cpVect r1, cpVect r2) noexcept nogil:
+    cdef cpVect v1_sum = cpvadd(a.v, cpvmult(cpvperp(r1), a.w))
+    cdef cpVect v2_sum = cpvadd(b.v, cpvmult(cpvperp(r2), b.w))
+    return cpvsub(v2_sum, v1_sum)
+
+cdef inline cpFloat normal_relative_velocity(cpBody *a, cpBody *b, cpVect r1, cpVect r2,
+                                             cpVect n) noexcept nogil:
+    return cpvdot(relative_velocity(a, b, r1, r2), n)
+
+cdef inline void apply_impulse(cpBody *body, cpVect j, cpVect r) noexcept nogil:
+    body.v = cpvadd(body.v, cpvmult(j, body.m_inv))
+    body.w += body.i_inv * cpvcross(r, j)
+
+cdef inline void apply_impulses(cpBody *a, cpBody *b, cpVect r1, cpVect r2, cpVect j) noexcept nogil:
+    apply_impulse(a, cpvneg(j), r1)
+    apply_impulse(b, j, r2)
+
+cdef inline void apply_bias_impulse(cpBody *body, cpVect j, cpVect r) noexcept nogil:
+    body.v_bias = cpvadd(body.v_bias, cpvmult(j, body.m_inv))
+    body.w_bias += body.i_inv * cpvcross(r, j)
+
+cdef inline void apply_bias_impulses(cpBody *a, cpBody *b, cpVect r1, cpVect r2, cpVect j) noexcept nogil:
+    apply_bias_impulse(a, cpvneg(j), r1)
+    apply_bias_impulse(b, j, r2)
+
+cdef inline cpFloat k_scalar_body(cpBody *body, cpVect r, cpVect n) noexcept nogil:
+    cdef cpFloat rcn = cpvcross(r, n)
+    return body.m_inv + body.i_inv * rcn * rcn
+
+# Effective-mass denominator of a contact. A zero result (both bodies
+# infinitely heavy along n) is returned as is: pymunk builds Munk2D without
+# its soft asserts, so the solver then divides by zero. The Python wrapper
+# k_scalar() raises UnsolvableCollision instead.
+cdef inline cpFloat k_scalar(cpBody *a, cpBody *b, cpVect r1, cpVect r2, cpVect n) noexcept nogil:
+    return k_scalar_body(a, r1, n) + k_scalar_body(b, r2, n)
+
+# -- narrow phase ----------------------------------------------------------------
+# The collision of two shapes with cached world data (cpShapeCacheBB).
+# `id` is the GJK warm-start id cached by the broad phase (0: none); the
+# updated id is returned in the info. Contacts (at most 2) are written to
+# `contacts` with absolute positions r1 (on info.a) and r2 (on info.b);
+# info.a/info.b may be the arguments swapped (shape types sorted).
+cdef cpCollisionInfo cpCollide(const cpShape *a, const cpShape *b, cpCollisionID id,
+                               cpContact *contacts) noexcept nogil
+
+# Contact points of two shapes oriented a -> b, as the query API reports them.
+cdef cpContactPointSet cpShapesCollide(const cpShape *a, const cpShape *b) noexcept nogil
+
+# -- diagnostics: flags recorded by the C code, read by the Python layer -----------
+cdef enum:
+    CP_COLLISION_FLAG_GJK_WARN = 1        # GJK reached WARN_GJK_ITERATIONS
+    CP_COLLISION_FLAG_EPA_WARN = 2        # EPA reached WARN_EPA_ITERATIONS
+    CP_COLLISION_FLAG_UNSORTED = 4        # the table was called with unsorted types
+    CP_COLLISION_FLAG_OVERFLOW = 8        # more than CP_MAX_CONTACTS_PER_ARBITER pushed
+    CP_COLLISION_FLAG_SAME_VERTICES = 16  # EPA's closest hull edge had equal ends
+
+# Read and clear this thread's flags (no GIL needed).
+cdef unsigned int cpCollisionTakeFlags() noexcept nogil
+# Read and clear the flags, then raise CollisionError / CollisionContactOverflow
+# or warn HighIterWarning as they say. Returns 0, or -1 with an exception set.
+cdef int collision_check_flags() except -1
+
+# -- Python-level contact point sets (pymunk.ContactPoint / ContactPointSet) --------
+cdef class ContactPoint:
+    cdef public object point_a
+    cdef public object point_b
+    cdef public object distance
+
+cdef class ContactPointSet:
+    cdef public object normal
+    cdef public object points
+
+# A ContactPointSet holding the first `count` points of a C set.
+cdef ContactPointSet contact_point_set_from_cp(const cpContactPointSet *cps)
