@@ -1,0 +1,1170 @@
+"""The broad phase: Munk2D's spatial index interface and its AABB tree.
+
+A faithful port of cpSpatialIndex.c and of cpBBTree.c at Munk2D 47b0e6b (the
+tree pymunk 7.3 runs: explicit stacks instead of recursion, segment-query
+pruning when children are pushed). The order in which pairs are reported is
+what fixes the solver order of the whole engine, so every traversal keeps
+Munk2D's order: insertion by area cost (ties by proximity, then child A), new
+leaf at child A, depth-first A before B, pair lists head-inserted, leaves
+updated in hash-set order.
+
+``_TestTree`` is a test-only wrapper over a static and a dynamic tree holding
+plain boxes; the engine uses the C functions of ``_bbtree.pxd``.
+"""
+from libc.stdlib cimport free, qsort
+from libc.string cimport memcpy
+from libc.stdint cimport uintptr_t, uint32_t
+from cpython.ref cimport PyObject
+from tamias2d._config cimport TAMIAS_FLOAT_0_1F, CP_BUFFER_BYTES
+from tamias2d.vector cimport (cpv, cpvmult, cpfmin, cpfmax, cpfabs, cpBBNew, cpBBMerge,
+    cpBBArea, cpBBMergedArea, cpBBIntersects, cpBBContainsBB, cpBBSegmentQuery)
+from tamias2d._containers cimport (cpcalloc, cprealloc, cpSetOutOfMemory,
+    cpTakeOutOfMemory, cpArrayNew, cpArrayFree, cpArrayPush, cpHashSetNew,
+    cpHashSetFree, cpHashSetInsert, cpHashSetRemove, cpHashSetFind, cpHashSetCount,
+    cpHashSetEach)
+from tamias2d._structs cimport (cpHashSetEqlFunc, cpHashSetTransFunc, cpHashSetIteratorFunc,
+    cpSpatialIndexDestroyImpl, cpSpatialIndexCountImpl, cpSpatialIndexEachImpl,
+    cpSpatialIndexContainsImpl, cpSpatialIndexInsertImpl, cpSpatialIndexRemoveImpl,
+    cpSpatialIndexReindexImpl, cpSpatialIndexReindexObjectImpl,
+    cpSpatialIndexReindexQueryImpl, cpSpatialIndexQueryImpl, cpSpatialIndexSegmentQueryImpl)
+
+
+# -- cpSpatialIndex.c ---------------------------------------------------------------
+cdef void cpSpatialIndexFree(cpSpatialIndex *index) noexcept nogil:
+    if index != NULL:
+        cpSpatialIndexDestroy(index)
+        free(index)
+
+
+cdef cpSpatialIndex *cpSpatialIndexInit(cpSpatialIndex *index, cpSpatialIndexClass *klass,
+                                        cpSpatialIndexBBFunc bbfunc,
+                                        cpSpatialIndex *staticIndex) noexcept nogil:
+    # Munk2D hard-asserts that a static index has one dynamic partner at most;
+    # here the misuse returns NULL and links nothing.
+    if staticIndex != NULL and staticIndex.dynamicIndex != NULL:
+        return NULL
+    index.klass = klass
+    index.bbfunc = bbfunc
+    index.staticIndex = staticIndex
+    if staticIndex != NULL:
+        staticIndex.dynamicIndex = index
+    return index
+
+
+cdef struct DynamicToStaticContext:
+    cpSpatialIndexBBFunc bbfunc
+    cpSpatialIndex *staticIndex
+    cpSpatialIndexQueryFunc queryFunc
+    void *data
+
+
+cdef void dynamicToStaticIter(void *obj, void *data) noexcept nogil:
+    cdef DynamicToStaticContext *context = <DynamicToStaticContext *>data
+    cpSpatialIndexQuery(context.staticIndex, obj, context.bbfunc(obj), context.queryFunc,
+                        context.data)
+
+
+cdef void cpSpatialIndexCollideStatic(cpSpatialIndex *dynamicIndex, cpSpatialIndex *staticIndex,
+                                      cpSpatialIndexQueryFunc func, void *data) noexcept nogil:
+    # Used when the static index is not a tree (the spatial hash): every
+    # dynamic object queries the static index with its own box.
+    cdef DynamicToStaticContext context
+    if staticIndex != NULL and cpSpatialIndexCount(staticIndex) > 0:
+        context.bbfunc = dynamicIndex.bbfunc
+        context.staticIndex = staticIndex
+        context.queryFunc = func
+        context.data = data
+        cpSpatialIndexEach(dynamicIndex, dynamicToStaticIter, &context)
+
+
+# -- explicit traversal stack (47b0e6b) -----------------------------------------------
+# 64 slots on the C stack, then a heap buffer that doubles. Only the LIFO order
+# matters for fidelity. If growing fails, the push is dropped and the
+# out-of-memory flag raised: the traversal is then incomplete, never unsafe.
+cdef enum:
+    STACK_INIT_SIZE = 64
+
+cdef struct NodeStack:
+    Node **items
+    int top
+    int cap
+    Node *local[STACK_INIT_SIZE]
+
+
+cdef inline void StackInit(NodeStack *s) noexcept nogil:
+    s.items = s.local
+    s.top = 0
+    s.cap = STACK_INIT_SIZE
+
+
+cdef bint StackGrow(NodeStack *s) noexcept nogil:
+    cdef int new_cap = s.cap * 2
+    cdef Node **grown
+    if s.items == s.local:
+        grown = <Node **>cpcalloc(new_cap, sizeof(Node *))
+        if grown == NULL:
+            return False
+        memcpy(grown, s.local, s.cap * sizeof(Node *))
+    else:
+        grown = <Node **>cprealloc(s.items, new_cap * sizeof(Node *))
+        if grown == NULL:
+            return False
+    s.items = grown
+    s.cap = new_cap
+    return True
+
+
+cdef inline void StackPush(NodeStack *s, Node *node) noexcept nogil:
+    if s.top >= s.cap and not StackGrow(s):
+        return
+    s.items[s.top] = node
+    s.top += 1
+
+
+cdef inline Node *StackPop(NodeStack *s) noexcept nogil:
+    s.top -= 1
+    return s.items[s.top]
+
+
+cdef inline void StackFree(NodeStack *s) noexcept nogil:
+    if s.items != s.local:
+        free(s.items)
+
+
+# -- misc -------------------------------------------------------------------------------
+cdef cpSpatialIndexClass klass
+
+
+cdef cpSpatialIndexClass *cpBBTreeClass() noexcept nogil:
+    return &klass
+
+
+cdef inline cpBB GetBB(cpBBTree *tree, void *obj) noexcept nogil:
+    cdef cpBB bb = tree.spatialIndex.bbfunc(obj)
+    cdef cpBBTreeVelocityFunc velocityFunc = tree.velocityFunc
+    cdef cpFloat coef, x, y
+    cdef cpVect v
+    if velocityFunc != NULL:
+        # Fattened box: 10% margin per side (the float literal 0.1f), grown
+        # further toward where the velocity points.
+        coef = TAMIAS_FLOAT_0_1F
+        x = (bb.r - bb.l) * coef
+        y = (bb.t - bb.b) * coef
+        v = cpvmult(velocityFunc(obj), TAMIAS_FLOAT_0_1F)
+        return cpBBNew(bb.l + cpfmin(-x, v.x), bb.b + cpfmin(-y, v.y),
+                       bb.r + cpfmax(x, v.x), bb.t + cpfmax(y, v.y))
+    return bb
+
+
+cdef inline cpBBTree *GetTree(cpSpatialIndex *index) noexcept nogil:
+    if index != NULL and index.klass == &klass:
+        return <cpBBTree *>index
+    return NULL
+
+
+cdef inline Node *GetRootIfTree(cpSpatialIndex *index) noexcept nogil:
+    if index != NULL and index.klass == &klass:
+        return (<cpBBTree *>index).root
+    return NULL
+
+
+cdef inline cpBBTree *GetMasterTree(cpBBTree *tree) noexcept nogil:
+    # The dynamic tree owns the stamp and the pair pool shared with its static tree.
+    cdef cpBBTree *dynamicTree = GetTree(tree.spatialIndex.dynamicIndex)
+    return dynamicTree if dynamicTree != NULL else tree
+
+
+cdef inline void IncrementStamp(cpBBTree *tree) noexcept nogil:
+    cdef cpBBTree *dynamicTree = GetTree(tree.spatialIndex.dynamicIndex)
+    if dynamicTree != NULL:
+        dynamicTree.stamp += 1
+    else:
+        tree.stamp += 1
+
+
+# -- pairs and threads ------------------------------------------------------------------
+cdef void PairRecycle(cpBBTree *tree, Pair *pair) noexcept nogil:
+    tree = GetMasterTree(tree)
+    pair.a.next = tree.pooledPairs
+    tree.pooledPairs = pair
+
+
+cdef Pair *PairFromPool(cpBBTree *tree) noexcept nogil:
+    tree = GetMasterTree(tree)
+    cdef Pair *pair = tree.pooledPairs
+    cdef int count, i
+    cdef Pair *block
+    if pair != NULL:
+        tree.pooledPairs = pair.a.next
+        return pair
+    count = CP_BUFFER_BYTES // sizeof(Pair)
+    block = <Pair *>cpcalloc(1, CP_BUFFER_BYTES)
+    if block == NULL:
+        return NULL
+    if not cpArrayPush(tree.allocatedBuffers, block):
+        free(block)
+        return NULL
+    for i in range(1, count):
+        PairRecycle(tree, block + i)
+    return block
+
+
+cdef inline void ThreadUnlink(Thread thread) noexcept nogil:
+    cdef Pair *next_pair = thread.next
+    cdef Pair *prev_pair = thread.prev
+    if next_pair != NULL:
+        if next_pair.a.leaf == thread.leaf:
+            next_pair.a.prev = prev_pair
+        else:
+            next_pair.b.prev = prev_pair
+    if prev_pair != NULL:
+        if prev_pair.a.leaf == thread.leaf:
+            prev_pair.a.next = next_pair
+        else:
+            prev_pair.b.next = next_pair
+    else:
+        thread.leaf.node.leaf.pairs = next_pair
+
+
+cdef void PairsClear(Node *leaf, cpBBTree *tree) noexcept nogil:
+    cdef Pair *pair = leaf.node.leaf.pairs
+    cdef Pair *next_pair
+    leaf.node.leaf.pairs = NULL
+    while pair != NULL:
+        if pair.a.leaf == leaf:
+            next_pair = pair.a.next
+            ThreadUnlink(pair.b)
+        else:
+            next_pair = pair.b.next
+            ThreadUnlink(pair.a)
+        PairRecycle(tree, pair)
+        pair = next_pair
+
+
+cdef void PairInsert(Node *a, Node *b, cpBBTree *tree) noexcept nogil:
+    cdef Pair *nextA = a.node.leaf.pairs
+    cdef Pair *nextB = b.node.leaf.pairs
+    cdef Pair *pair = PairFromPool(tree)
+    if pair == NULL:
+        return      # out of memory: the pair is lost, the flag is raised
+    # The new pair goes at the head of both leaves' lists, id 0 (no cache yet).
+    pair.a.prev = NULL
+    pair.a.leaf = a
+    pair.a.next = nextA
+    pair.b.prev = NULL
+    pair.b.leaf = b
+    pair.b.next = nextB
+    pair.id = 0
+    a.node.leaf.pairs = pair
+    b.node.leaf.pairs = pair
+    if nextA != NULL:
+        if nextA.a.leaf == a:
+            nextA.a.prev = pair
+        else:
+            nextA.b.prev = pair
+    if nextB != NULL:
+        if nextB.a.leaf == b:
+            nextB.a.prev = pair
+        else:
+            nextB.b.prev = pair
+
+
+# -- nodes --------------------------------------------------------------------------------
+cdef inline void NodeRecycle(cpBBTree *tree, Node *node) noexcept nogil:
+    node.parent = tree.pooledNodes
+    tree.pooledNodes = node
+
+
+cdef bint NodePoolAddBlock(cpBBTree *tree) noexcept nogil:
+    cdef int count = CP_BUFFER_BYTES // sizeof(Node)
+    cdef int i
+    cdef Node *block = <Node *>cpcalloc(1, CP_BUFFER_BYTES)
+    if block == NULL:
+        return False
+    if not cpArrayPush(tree.allocatedBuffers, block):
+        free(block)
+        return False
+    for i in range(count - 1, -1, -1):
+        NodeRecycle(tree, block + i)
+    return True
+
+
+cdef Node *NodeFromPool(cpBBTree *tree) noexcept nogil:
+    cdef Node *node = tree.pooledNodes
+    if node == NULL:
+        if not NodePoolAddBlock(tree):
+            return NULL
+        node = tree.pooledNodes
+    tree.pooledNodes = node.parent
+    return node
+
+
+cdef bint NodePoolReserve(cpBBTree *tree, int n) noexcept nogil:
+    # Makes sure n nodes can be taken without allocating, so an insertion
+    # never fails half way through the tree surgery.
+    cdef Node *node = tree.pooledNodes
+    cdef int have = 0
+    while node != NULL and have < n:
+        have += 1
+        node = node.parent
+    return have >= n or NodePoolAddBlock(tree)
+
+
+cdef inline void NodeSetA(Node *node, Node *value) noexcept nogil:
+    node.node.children.a = value
+    value.parent = node
+
+
+cdef inline void NodeSetB(Node *node, Node *value) noexcept nogil:
+    node.node.children.b = value
+    value.parent = node
+
+
+cdef Node *NodeNew(cpBBTree *tree, Node *a, Node *b) noexcept nogil:
+    cdef Node *node = NodeFromPool(tree)
+    if node == NULL:
+        return NULL
+    node.obj = NULL
+    node.bb = cpBBMerge(a.bb, b.bb)
+    node.parent = NULL
+    NodeSetA(node, a)
+    NodeSetB(node, b)
+    return node
+
+
+cdef inline bint NodeIsLeaf(Node *node) noexcept nogil:
+    return node.obj != NULL
+
+
+cdef inline Node *NodeOther(Node *node, Node *child) noexcept nogil:
+    return node.node.children.b if node.node.children.a == child else node.node.children.a
+
+
+cdef inline void NodeReplaceChild(Node *parent, Node *child, Node *value,
+                                  cpBBTree *tree) noexcept nogil:
+    cdef Node *node
+    if parent.node.children.a == child:
+        NodeRecycle(tree, parent.node.children.a)
+        NodeSetA(parent, value)
+    else:
+        NodeRecycle(tree, parent.node.children.b)
+        NodeSetB(parent, value)
+    node = parent
+    while node != NULL:
+        node.bb = cpBBMerge(node.node.children.a.bb, node.node.children.b.bb)
+        node = node.parent
+
+
+# -- subtrees ------------------------------------------------------------------------------
+cdef inline cpFloat cpBBProximity(cpBB a, cpBB b) noexcept nogil:
+    return cpfabs(a.l + a.r - b.l - b.r) + cpfabs(a.b + a.t - b.b - b.t)
+
+
+cdef Node *SubtreeInsert(Node *subtree, Node *leaf, cpBBTree *tree) noexcept nogil:
+    # Callers reserve the one internal node this may need (NodePoolReserve).
+    cdef Node *node
+    cdef Node *parent
+    cdef Node *newNode
+    cdef cpFloat cost_a, cost_b
+    if subtree == NULL:
+        return leaf
+    if NodeIsLeaf(subtree):
+        return NodeNew(tree, leaf, subtree)
+    node = subtree
+    while not NodeIsLeaf(node):
+        # Cost of descending into a child: its growth plus the sibling's area.
+        cost_a = cpBBArea(node.node.children.b.bb) + cpBBMergedArea(node.node.children.a.bb, leaf.bb)
+        cost_b = cpBBArea(node.node.children.a.bb) + cpBBMergedArea(node.node.children.b.bb, leaf.bb)
+        if cost_a == cost_b:
+            cost_a = cpBBProximity(node.node.children.a.bb, leaf.bb)
+            cost_b = cpBBProximity(node.node.children.b.bb, leaf.bb)
+        if cost_b < cost_a:
+            node = node.node.children.b
+        else:
+            node = node.node.children.a
+    # Pair the leaf found with the new one (new leaf at A) in its place.
+    parent = node.parent
+    newNode = NodeNew(tree, leaf, node)
+    if parent.node.children.a == node:
+        NodeSetA(parent, newNode)
+    else:
+        NodeSetB(parent, newNode)
+    while parent != NULL:
+        parent.bb = cpBBMerge(parent.bb, leaf.bb)
+        parent = parent.parent
+    return subtree
+
+
+cdef void SubtreeQuery(Node *subtree, void *obj, cpBB bb, cpSpatialIndexQueryFunc func,
+                       void *data) noexcept nogil:
+    cdef NodeStack stack
+    cdef Node *node
+    StackInit(&stack)
+    StackPush(&stack, subtree)
+    while stack.top > 0:
+        node = StackPop(&stack)
+        if cpBBIntersects(node.bb, bb):
+            if NodeIsLeaf(node):
+                func(obj, node.obj, 0, data)
+            else:
+                # B pushed first so that A is visited first.
+                StackPush(&stack, node.node.children.b)
+                StackPush(&stack, node.node.children.a)
+    StackFree(&stack)
+
+
+cdef cpFloat SubtreeSegmentQuery(Node *subtree, void *obj, cpVect a, cpVect b, cpFloat t_exit,
+                                 cpSpatialIndexSegmentQueryFunc func, void *data) noexcept nogil:
+    cdef NodeStack stack
+    cdef Node *node
+    cdef cpFloat t_a, t_b
+    StackInit(&stack)
+    StackPush(&stack, subtree)
+    while stack.top > 0:
+        node = StackPop(&stack)
+        if NodeIsLeaf(node):
+            t_exit = cpfmin(t_exit, func(obj, node.obj, data))
+        else:
+            t_a = cpBBSegmentQuery(node.node.children.a.bb, a, b)
+            t_b = cpBBSegmentQuery(node.node.children.b.bb, a, b)
+            # Children are tested against t_exit now, when pushed (47b0e6b);
+            # the nearer one is pushed last so it is visited first, B on a tie.
+            if t_a < t_b:
+                if t_b < t_exit:
+                    StackPush(&stack, node.node.children.b)
+                if t_a < t_exit:
+                    StackPush(&stack, node.node.children.a)
+            else:
+                if t_a < t_exit:
+                    StackPush(&stack, node.node.children.a)
+                if t_b < t_exit:
+                    StackPush(&stack, node.node.children.b)
+    StackFree(&stack)
+    return t_exit
+
+
+cdef void SubtreeRecycle(cpBBTree *tree, Node *root, Node **leaves, int count) noexcept nogil:
+    # Returns every internal node under root to the pool. Munk2D walks the
+    # subtree with a stack; walking up from each leaf needs no memory and
+    # recycles the same nodes (only the pool order differs, which nothing
+    # observes). An internal node is marked visited by clearing child A.
+    cdef int i
+    cdef Node *node
+    cdef Node *up
+    if NodeIsLeaf(root):
+        return
+    for i in range(count):
+        node = leaves[i].parent
+        leaves[i].parent = NULL
+        while node != NULL and node.node.children.a != NULL:
+            up = node.parent
+            node.node.children.a = NULL
+            NodeRecycle(tree, node)
+            node = up
+
+
+cdef inline Node *SubtreeRemove(Node *subtree, Node *leaf, cpBBTree *tree) noexcept nogil:
+    cdef Node *parent
+    cdef Node *other
+    if leaf == subtree:
+        return NULL
+    parent = leaf.parent
+    if parent == subtree:
+        other = NodeOther(subtree, leaf)
+        other.parent = subtree.parent
+        NodeRecycle(tree, subtree)
+        return other
+    NodeReplaceChild(parent.parent, parent, NodeOther(parent, leaf), tree)
+    return subtree
+
+
+# -- marking: pair generation ----------------------------------------------------------------
+cdef struct MarkContext:
+    cpBBTree *tree
+    Node *staticRoot
+    cpSpatialIndexQueryFunc func
+    void *data
+
+
+cdef void MarkLeafQuery(Node *subtree, Node *leaf, bint left, MarkContext *context) noexcept nogil:
+    cdef NodeStack stack
+    cdef Node *node
+    StackInit(&stack)
+    StackPush(&stack, subtree)
+    while stack.top > 0:
+        node = StackPop(&stack)
+        if cpBBIntersects(leaf.bb, node.bb):
+            if NodeIsLeaf(node):
+                if left:
+                    PairInsert(leaf, node, context.tree)
+                else:
+                    if node.node.leaf.stamp < leaf.node.leaf.stamp:
+                        PairInsert(node, leaf, context.tree)
+                    context.func(leaf.obj, node.obj, 0, context.data)
+            else:
+                StackPush(&stack, node.node.children.b)
+                StackPush(&stack, node.node.children.a)
+    StackFree(&stack)
+
+
+cdef void MarkLeaf(Node *leaf, MarkContext *context) noexcept nogil:
+    cdef cpBBTree *tree = context.tree
+    cdef Node *node
+    cdef Pair *pair
+    if leaf.node.leaf.stamp == GetMasterTree(tree).stamp:
+        # Moved (or new) this stamp: find its pairs afresh. Against the static
+        # tree, and against each ancestor's other subtree: a right sibling only
+        # records pairs, a left sibling also reports them.
+        if context.staticRoot != NULL:
+            MarkLeafQuery(context.staticRoot, leaf, False, context)
+        node = leaf
+        while node.parent != NULL:
+            if node == node.parent.node.children.a:
+                MarkLeafQuery(node.parent.node.children.b, leaf, True, context)
+            else:
+                MarkLeafQuery(node.parent.node.children.a, leaf, False, context)
+            node = node.parent
+    else:
+        # Unchanged: replay the cached pairs where this leaf is side b, storing
+        # the narrow phase's id back into the pair.
+        pair = leaf.node.leaf.pairs
+        while pair != NULL:
+            if leaf == pair.b.leaf:
+                pair.id = context.func(pair.a.leaf.obj, leaf.obj, pair.id, context.data)
+                pair = pair.b.next
+            else:
+                pair = pair.a.next
+
+
+cdef void MarkSubtree(Node *subtree, MarkContext *context) noexcept nogil:
+    cdef NodeStack stack
+    cdef Node *node
+    StackInit(&stack)
+    StackPush(&stack, subtree)
+    while stack.top > 0:
+        node = StackPop(&stack)
+        if NodeIsLeaf(node):
+            MarkLeaf(node, context)
+        else:
+            StackPush(&stack, node.node.children.b)
+            StackPush(&stack, node.node.children.a)
+    StackFree(&stack)
+
+
+# -- leaves ----------------------------------------------------------------------------------
+cdef Node *LeafNew(cpBBTree *tree, void *obj) noexcept nogil:
+    cdef Node *node = NodeFromPool(tree)
+    if node == NULL:
+        return NULL
+    node.obj = obj
+    node.bb = GetBB(tree, obj)
+    node.parent = NULL
+    node.node.leaf.stamp = 0
+    node.node.leaf.pairs = NULL
+    return node
+
+
+cdef bint LeafUpdate(Node *leaf, cpBBTree *tree) noexcept nogil:
+    cdef Node *root = tree.root
+    cdef cpBB bb = tree.spatialIndex.bbfunc(leaf.obj)
+    if not cpBBContainsBB(leaf.bb, bb):
+        # Left its fat box: refatten and reinsert. The removal frees the one
+        # internal node the insertion takes, so this cannot run out of memory.
+        leaf.bb = GetBB(tree, leaf.obj)
+        root = SubtreeRemove(root, leaf, tree)
+        tree.root = SubtreeInsert(root, leaf, tree)
+        PairsClear(leaf, tree)
+        leaf.node.leaf.stamp = GetMasterTree(tree).stamp
+        return True
+    return False
+
+
+cdef cpCollisionID VoidQueryFunc(void *obj1, void *obj2, cpCollisionID id, void *data) noexcept nogil:
+    return id
+
+
+cdef void LeafAddPairs(Node *leaf, cpBBTree *tree) noexcept nogil:
+    cdef cpSpatialIndex *dynamicIndex = tree.spatialIndex.dynamicIndex
+    cdef Node *dynamicRoot
+    cdef MarkContext context
+    if dynamicIndex != NULL:
+        # A static leaf: record pairs with the dynamic tree, report nothing.
+        dynamicRoot = GetRootIfTree(dynamicIndex)
+        if dynamicRoot != NULL:
+            context.tree = GetTree(dynamicIndex)
+            context.staticRoot = NULL
+            context.func = NULL
+            context.data = NULL
+            MarkLeafQuery(dynamicRoot, leaf, True, &context)
+    else:
+        context.tree = tree
+        context.staticRoot = GetRootIfTree(tree.spatialIndex.staticIndex)
+        context.func = VoidQueryFunc
+        context.data = NULL
+        MarkLeaf(leaf, &context)
+
+
+# -- memory management ------------------------------------------------------------------------
+cdef cpBBTree *cpBBTreeAlloc() noexcept nogil:
+    return <cpBBTree *>cpcalloc(1, sizeof(cpBBTree))
+
+
+cdef cpBool leafSetEql(const void *obj, const void *elt) noexcept nogil:
+    return obj == (<Node *>elt).obj
+
+
+cdef void *leafSetTrans(const void *obj, void *data) noexcept nogil:
+    return LeafNew(<cpBBTree *>data, <void *>obj)
+
+
+cdef cpSpatialIndex *cpBBTreeInit(cpBBTree *tree, cpSpatialIndexBBFunc bbfunc,
+                                  cpSpatialIndex *staticIndex) noexcept nogil:
+    if tree == NULL:
+        return NULL
+    if cpSpatialIndexInit(<cpSpatialIndex *>tree, &klass, bbfunc, staticIndex) == NULL:
+        return NULL
+    tree.velocityFunc = NULL
+    tree.leaves = cpHashSetNew(0, leafSetEql)
+    tree.root = NULL
+    tree.pooledNodes = NULL
+    tree.pooledPairs = NULL
+    tree.allocatedBuffers = cpArrayNew(0)
+    tree.stamp = 0
+    if tree.leaves == NULL or tree.allocatedBuffers == NULL:
+        cpHashSetFree(tree.leaves)
+        cpArrayFree(tree.allocatedBuffers)
+        tree.leaves = NULL
+        tree.allocatedBuffers = NULL
+        if staticIndex != NULL:
+            staticIndex.dynamicIndex = NULL
+        tree.spatialIndex.klass = NULL
+        return NULL
+    return <cpSpatialIndex *>tree
+
+
+cdef void cpBBTreeSetVelocityFunc(cpSpatialIndex *index, cpBBTreeVelocityFunc func) noexcept nogil:
+    if index.klass != &klass:
+        return      # not a tree: ignored, as Munk2D does (its warning is compiled out)
+    (<cpBBTree *>index).velocityFunc = func
+
+
+cdef cpSpatialIndex *cpBBTreeNew(cpSpatialIndexBBFunc bbfunc, cpSpatialIndex *staticIndex) noexcept nogil:
+    cdef cpBBTree *tree = cpBBTreeAlloc()
+    if tree == NULL:
+        return NULL
+    if cpBBTreeInit(tree, bbfunc, staticIndex) == NULL:
+        free(tree)
+        return NULL
+    return <cpSpatialIndex *>tree
+
+
+cdef void cpBBTreeDestroy(cpSpatialIndex *index) noexcept nogil:
+    cdef cpBBTree *tree = <cpBBTree *>index
+    cdef int i
+    cpHashSetFree(tree.leaves)
+    if tree.allocatedBuffers != NULL:
+        for i in range(tree.allocatedBuffers.num):
+            free(tree.allocatedBuffers.arr[i])
+    cpArrayFree(tree.allocatedBuffers)
+
+
+# -- insert / remove ---------------------------------------------------------------------------
+cdef void cpBBTreeInsert(cpSpatialIndex *index, void *obj, cpHashValue hashid) noexcept nogil:
+    cdef cpBBTree *tree = <cpBBTree *>index
+    # The leaf and the internal node that joins it to the tree.
+    if not NodePoolReserve(tree, 2):
+        return
+    cdef Node *leaf = <Node *>cpHashSetInsert(tree.leaves, hashid, obj, leafSetTrans, tree)
+    if leaf == NULL:
+        return
+    tree.root = SubtreeInsert(tree.root, leaf, tree)
+    leaf.node.leaf.stamp = GetMasterTree(tree).stamp
+    LeafAddPairs(leaf, tree)
+    IncrementStamp(tree)
+
+
+cdef void cpBBTreeRemove(cpSpatialIndex *index, void *obj, cpHashValue hashid) noexcept nogil:
+    cdef cpBBTree *tree = <cpBBTree *>index
+    cdef Node *leaf = <Node *>cpHashSetRemove(tree.leaves, hashid, obj)
+    if leaf == NULL:
+        return      # not in this tree (Munk2D would crash)
+    tree.root = SubtreeRemove(tree.root, leaf, tree)
+    PairsClear(leaf, tree)
+    NodeRecycle(tree, leaf)
+
+
+cdef cpBool cpBBTreeContains(cpSpatialIndex *index, void *obj, cpHashValue hashid) noexcept nogil:
+    return cpHashSetFind((<cpBBTree *>index).leaves, hashid, obj) != NULL
+
+
+# -- reindex ------------------------------------------------------------------------------------
+cdef void LeafUpdateWrap(void *elt, void *data) noexcept nogil:
+    LeafUpdate(<Node *>elt, <cpBBTree *>data)
+
+
+cdef void cpBBTreeReindexQuery(cpSpatialIndex *index, cpSpatialIndexQueryFunc func,
+                               void *data) noexcept nogil:
+    cdef cpBBTree *tree = <cpBBTree *>index
+    cdef cpSpatialIndex *staticIndex
+    cdef Node *staticRoot = NULL
+    cdef MarkContext context
+    if tree.root == NULL:
+        return
+    # Leaves are refreshed in hash-set order; LeafUpdate may change the root.
+    cpHashSetEach(tree.leaves, LeafUpdateWrap, tree)
+    staticIndex = tree.spatialIndex.staticIndex
+    if staticIndex != NULL and staticIndex.klass == &klass:
+        staticRoot = (<cpBBTree *>staticIndex).root
+    context.tree = tree
+    context.staticRoot = staticRoot
+    context.func = func
+    context.data = data
+    MarkSubtree(tree.root, &context)
+    if staticIndex != NULL and staticRoot == NULL:
+        cpSpatialIndexCollideStatic(<cpSpatialIndex *>tree, staticIndex, func, data)
+    IncrementStamp(tree)
+
+
+cdef void cpBBTreeReindex(cpSpatialIndex *index) noexcept nogil:
+    cpBBTreeReindexQuery(index, VoidQueryFunc, NULL)
+
+
+cdef void cpBBTreeReindexObject(cpSpatialIndex *index, void *obj, cpHashValue hashid) noexcept nogil:
+    cdef cpBBTree *tree = <cpBBTree *>index
+    cdef Node *leaf = <Node *>cpHashSetFind(tree.leaves, hashid, obj)
+    if leaf != NULL:
+        if LeafUpdate(leaf, tree):
+            LeafAddPairs(leaf, tree)
+        IncrementStamp(tree)
+
+
+# -- queries ------------------------------------------------------------------------------------
+cdef void cpBBTreeSegmentQuery(cpSpatialIndex *index, void *obj, cpVect a, cpVect b, cpFloat t_exit,
+                               cpSpatialIndexSegmentQueryFunc func, void *data) noexcept nogil:
+    cdef Node *root = (<cpBBTree *>index).root
+    if root != NULL:
+        SubtreeSegmentQuery(root, obj, a, b, t_exit, func, data)
+
+
+cdef void cpBBTreeQuery(cpSpatialIndex *index, void *obj, cpBB bb, cpSpatialIndexQueryFunc func,
+                        void *data) noexcept nogil:
+    cdef Node *root = (<cpBBTree *>index).root
+    if root != NULL:
+        SubtreeQuery(root, obj, bb, func, data)
+
+
+cdef int cpBBTreeCount(cpSpatialIndex *index) noexcept nogil:
+    return cpHashSetCount((<cpBBTree *>index).leaves)
+
+
+cdef struct EachContext:
+    cpSpatialIndexIteratorFunc func
+    void *data
+
+
+cdef void each_helper(void *elt, void *data) noexcept nogil:
+    cdef EachContext *context = <EachContext *>data
+    context.func((<Node *>elt).obj, context.data)
+
+
+cdef void cpBBTreeEach(cpSpatialIndex *index, cpSpatialIndexIteratorFunc func, void *data) noexcept nogil:
+    cdef EachContext context
+    context.func = func
+    context.data = data
+    cpHashSetEach((<cpBBTree *>index).leaves, each_helper, &context)
+
+
+klass.destroy = cpBBTreeDestroy
+klass.count = cpBBTreeCount
+klass.each = cpBBTreeEach
+klass.contains = cpBBTreeContains
+klass.insert = cpBBTreeInsert
+klass.remove = cpBBTreeRemove
+klass.reindex = cpBBTreeReindex
+klass.reindexObject = cpBBTreeReindexObject
+klass.reindexQuery = cpBBTreeReindexQuery
+klass.query = cpBBTreeQuery
+klass.segmentQuery = cpBBTreeSegmentQuery
+
+
+# -- optimization (top-down rebuild; pymunk never calls it) --------------------------------------
+cdef int cpfcompare(const void *a, const void *b) noexcept nogil:
+    cdef cpFloat fa = (<const cpFloat *>a)[0]
+    cdef cpFloat fb = (<const cpFloat *>b)[0]
+    return -1 if fa < fb else (1 if fb < fa else 0)
+
+
+cdef struct FillCursor:
+    Node **cursor
+
+
+cdef void fillNodeArray(void *elt, void *data) noexcept nogil:
+    cdef FillCursor *c = <FillCursor *>data
+    c.cursor[0] = <Node *>elt
+    c.cursor += 1
+
+
+cdef Node *partitionNodes(cpBBTree *tree, Node **nodes, int count, cpFloat *bounds) noexcept nogil:
+    # `bounds` is scratch space for 2*count values, allocated once by the caller
+    # (Munk2D allocates it per call; the values and the split are the same).
+    cdef int i, left, right
+    cdef cpBB bb, a, b
+    cdef bint splitWidth
+    cdef cpFloat split
+    cdef Node *node
+    if count == 1:
+        return nodes[0]
+    elif count == 2:
+        return NodeNew(tree, nodes[0], nodes[1])
+    bb = nodes[0].bb
+    for i in range(1, count):
+        bb = cpBBMerge(bb, nodes[i].bb)
+    # Split the longer axis at the median of the boxes' bounds.
+    splitWidth = (bb.r - bb.l) > (bb.t - bb.b)
+    if splitWidth:
+        for i in range(count):
+            bounds[2 * i + 0] = nodes[i].bb.l
+            bounds[2 * i + 1] = nodes[i].bb.r
+    else:
+        for i in range(count):
+            bounds[2 * i + 0] = nodes[i].bb.b
+            bounds[2 * i + 1] = nodes[i].bb.t
+    qsort(bounds, count * 2, sizeof(cpFloat), cpfcompare)
+    split = (bounds[count - 1] + bounds[count]) * 0.5
+    a = bb
+    b = bb
+    if splitWidth:
+        a.r = split
+        b.l = split
+    else:
+        a.t = split
+        b.b = split
+    right = count
+    left = 0
+    while left < right:
+        node = nodes[left]
+        if cpBBMergedArea(node.bb, b) < cpBBMergedArea(node.bb, a):
+            right -= 1
+            nodes[left] = nodes[right]
+            nodes[right] = node
+        else:
+            left += 1
+    if right == count or right == 0:
+        # No useful split: insert one by one. (Munk2D tests right == count
+        # only; right == 0 would make it read past the array.)
+        node = NULL
+        for i in range(count):
+            node = SubtreeInsert(node, nodes[i], tree)
+        return node
+    return NodeNew(tree, partitionNodes(tree, nodes, right, bounds),
+                   partitionNodes(tree, nodes + right, count - right, bounds))
+
+
+cdef void cpBBTreeOptimize(cpSpatialIndex *index) noexcept nogil:
+    if index.klass != &klass:
+        return
+    cdef cpBBTree *tree = <cpBBTree *>index
+    cdef Node *root = tree.root
+    cdef int count
+    cdef Node **nodes
+    cdef cpFloat *bounds
+    cdef FillCursor cursor
+    if root == NULL:
+        return
+    count = cpBBTreeCount(index)
+    nodes = <Node **>cpcalloc(count, sizeof(Node *))
+    bounds = <cpFloat *>cpcalloc(2 * count, sizeof(cpFloat))
+    if nodes == NULL or bounds == NULL:
+        free(nodes)
+        free(bounds)
+        return      # out of memory: the tree is left as it was
+    cursor.cursor = nodes
+    cpHashSetEach(tree.leaves, fillNodeArray, &cursor)
+    # The rebuild takes exactly as many internal nodes as this returns to the pool.
+    SubtreeRecycle(tree, root, nodes, count)
+    tree.root = partitionNodes(tree, nodes, count, bounds)
+    free(nodes)
+    free(bounds)
+
+
+# -- test-only wrapper -----------------------------------------------------------------------------
+cdef struct TestObj:
+    long id
+    cpBB bb
+    cpVect v
+    cpFloat t               # what the segment-query callback returns for it
+    cpHashValue hashid
+    int where               # 0: in no index, 1: dynamic, 2: static
+
+
+cdef struct TestLogCtx:
+    PyObject *log           # borrowed list
+    uint32_t counter
+    TestObj *query_obj
+
+
+cdef cpBB _test_bb(void *obj) noexcept nogil:
+    return (<TestObj *>obj).bb
+
+
+cdef cpVect _test_vel(void *obj) noexcept nogil:
+    return (<TestObj *>obj).v
+
+
+cdef inline uint32_t _test_new_id(uint32_t id, long a, long b, uint32_t counter) noexcept nogil:
+    # An arbitrary function of everything, so a wrong cached id shows up.
+    return <uint32_t>(id * <uint32_t>2654435761u + <uint32_t>a * <uint32_t>40503u
+                      + <uint32_t>b * <uint32_t>9973u + counter)
+
+
+cdef cpCollisionID _test_pair_func(void *obj1, void *obj2, cpCollisionID id, void *data) noexcept nogil:
+    cdef TestLogCtx *ctx = <TestLogCtx *>data
+    cdef long a = (<TestObj *>obj1).id
+    cdef long b = (<TestObj *>obj2).id
+    ctx.counter += 1
+    with gil:
+        (<list>ctx.log).append((a, b, id))
+    return _test_new_id(id, a, b, ctx.counter)
+
+
+cdef cpFloat _test_segment_func(void *obj1, void *obj2, void *data) noexcept nogil:
+    cdef TestLogCtx *ctx = <TestLogCtx *>data
+    with gil:
+        (<list>ctx.log).append((<TestObj *>obj2).id)
+    return (<TestObj *>obj2).t
+
+
+cdef void _test_each_func(void *obj, void *data) noexcept nogil:
+    cdef TestLogCtx *ctx = <TestLogCtx *>data
+    with gil:
+        (<list>ctx.log).append((<TestObj *>obj).id)
+
+
+cdef class _TestTree:
+    """Test-only pair of trees (static, and dynamic linked to it) over boxes.
+
+    Objects are numbered from 0 in order of creation; each insertion takes a
+    fresh hash id from a counter, as the space does with shapes. Boxes are
+    (l, b, r, t); the dynamic tree fattens them by 10% and by 0.1 * v.
+
+    >>> t = _TestTree()
+    >>> a = t.add((0, 0, 1, 1)); b = t.add((0.5, 0.5, 2, 2))
+    >>> t.reindex_query()
+    [(1, 0, 0)]
+    >>> t.query((1.5, 1.5, 3, 3))
+    [1]
+    """
+    cdef cpSpatialIndex *static_index
+    cdef cpSpatialIndex *dynamic_index
+    cdef TestObj *objs
+    cdef int capacity
+    cdef int nobjs
+    cdef cpHashValue hash_counter
+    cdef uint32_t counter
+
+    def __cinit__(self, int capacity=4096, bint fatten=True):
+        self.objs = <TestObj *>cpcalloc(capacity, sizeof(TestObj))
+        self.static_index = cpBBTreeNew(_test_bb, NULL)
+        if self.static_index != NULL:
+            self.dynamic_index = cpBBTreeNew(_test_bb, self.static_index)
+        if self.objs == NULL or self.static_index == NULL or self.dynamic_index == NULL:
+            cpTakeOutOfMemory()
+            raise MemoryError("could not create the trees")
+        if fatten:
+            cpBBTreeSetVelocityFunc(self.dynamic_index, _test_vel)
+        self.capacity = capacity
+
+    def __dealloc__(self):
+        cpSpatialIndexFree(self.dynamic_index)
+        cpSpatialIndexFree(self.static_index)
+        free(self.objs)
+
+    cdef TestObj *_obj(self, long oid) except NULL:
+        if oid < 0 or oid >= self.nobjs:
+            raise IndexError(f"no object {oid}")
+        return &self.objs[oid]
+
+    cdef cpSpatialIndex *_index(self, bint static):
+        return self.static_index if static else self.dynamic_index
+
+    def _check_oom(self):
+        if cpTakeOutOfMemory():
+            raise MemoryError("the tree ran out of memory")
+
+    def add(self, bb, v=(0.0, 0.0), bint static=False, t=1.0):
+        """Create an object with box bb and velocity v, insert it; return its id."""
+        if self.nobjs >= self.capacity:
+            raise IndexError("test tree is full")
+        cdef TestObj *o = &self.objs[self.nobjs]
+        o.id = self.nobjs
+        o.bb = cpBBNew(bb[0], bb[1], bb[2], bb[3])
+        o.v = cpv(v[0], v[1])
+        o.t = t
+        self.nobjs += 1
+        self.insert(o.id, static)
+        return o.id
+
+    def insert(self, long oid, bint static=False, hashid=None):
+        """(Re)insert an object, with a fresh hash id unless one is given."""
+        cdef TestObj *o = self._obj(oid)
+        if o.where != 0:
+            raise ValueError(f"object {oid} is already in a tree")
+        if hashid is None:
+            o.hashid = self.hash_counter
+            self.hash_counter += 1
+        else:
+            o.hashid = hashid
+        cpSpatialIndexInsert(self._index(static), o, o.hashid)
+        self._check_oom()
+        o.where = 2 if static else 1
+
+    def remove(self, long oid):
+        cdef TestObj *o = self._obj(oid)
+        if o.where == 0:
+            raise ValueError(f"object {oid} is in no tree")
+        cpSpatialIndexRemove(self._index(o.where == 2), o, o.hashid)
+        o.where = 0
+
+    def move_to(self, long oid, bint static):
+        """Remove and reinsert with the same hash id (what sleeping does)."""
+        cdef TestObj *o = self._obj(oid)
+        self.remove(oid)
+        self.insert(oid, static, o.hashid)
+
+    def set_bb(self, long oid, bb, v=None):
+        cdef TestObj *o = self._obj(oid)
+        o.bb = cpBBNew(bb[0], bb[1], bb[2], bb[3])
+        if v is not None:
+            o.v = cpv(v[0], v[1])
+
+    def set_t(self, long oid, double t):
+        self._obj(oid).t = t
+
+    def contains(self, long oid, bint static=False):
+        cdef TestObj *o = self._obj(oid)
+        return bool(cpSpatialIndexContains(self._index(static), o, o.hashid))
+
+    def count(self, bint static=False):
+        return cpSpatialIndexCount(self._index(static))
+
+    def each(self, bint static=False):
+        cdef list log = []
+        cdef TestLogCtx ctx
+        ctx.log = <PyObject *>log
+        cpSpatialIndexEach(self._index(static), _test_each_func, &ctx)
+        return log
+
+    def reindex_query(self):
+        """Broad phase of the dynamic tree: [(a, b, cached id passed in), ...]."""
+        cdef list log = []
+        cdef TestLogCtx ctx
+        ctx.log = <PyObject *>log
+        ctx.counter = self.counter
+        cpSpatialIndexReindexQuery(self.dynamic_index, _test_pair_func, &ctx)
+        self.counter = ctx.counter
+        self._check_oom()
+        return log
+
+    def reindex(self, bint static=True):
+        cpSpatialIndexReindex(self._index(static))
+        self._check_oom()
+
+    def reindex_object(self, long oid):
+        """Reindex one object in both trees, as cpSpaceReindexShape does."""
+        cdef TestObj *o = self._obj(oid)
+        cpSpatialIndexReindexObject(self.dynamic_index, o, o.hashid)
+        cpSpatialIndexReindexObject(self.static_index, o, o.hashid)
+        self._check_oom()
+
+    def query(self, bb, static=None):
+        """Ids reported by a box query: dynamic then static tree, unless one is chosen."""
+        cdef list log = []
+        cdef TestLogCtx ctx
+        cdef TestObj probe
+        cdef cpBB box = cpBBNew(bb[0], bb[1], bb[2], bb[3])
+        probe.id = -1
+        ctx.log = <PyObject *>log
+        ctx.counter = 0
+        if static is None or not static:
+            cpSpatialIndexQuery(self.dynamic_index, &probe, box, _test_pair_func, &ctx)
+        if static is None or static:
+            cpSpatialIndexQuery(self.static_index, &probe, box, _test_pair_func, &ctx)
+        return [entry[1] for entry in log]
+
+    def segment_query(self, a, b, double t_exit=1.0, static=None):
+        """Ids visited by a segment query: static then dynamic tree, as the space does."""
+        cdef list log = []
+        cdef TestLogCtx ctx
+        cdef TestObj probe
+        probe.id = -1
+        ctx.log = <PyObject *>log
+        if static is None or static:
+            cpSpatialIndexSegmentQuery(self.static_index, &probe, cpv(a[0], a[1]), cpv(b[0], b[1]),
+                                       t_exit, _test_segment_func, &ctx)
+        if static is None or not static:
+            cpSpatialIndexSegmentQuery(self.dynamic_index, &probe, cpv(a[0], a[1]), cpv(b[0], b[1]),
+                                       t_exit, _test_segment_func, &ctx)
+        return log
+
+    def optimize(self, bint static=False):
+        cpBBTreeOptimize(self._index(static))
+        self._check_oom()
+
+    def leaf_bb(self, long oid):
+        """The (fattened) box stored in the object's leaf."""
+        cdef TestObj *o = self._obj(oid)
+        cdef cpBBTree *tree = <cpBBTree *>self._index(o.where == 2)
+        cdef Node *leaf = <Node *>cpHashSetFind(tree.leaves, o.hashid, o)
+        if leaf == NULL:
+            return None
+        return (leaf.bb.l, leaf.bb.b, leaf.bb.r, leaf.bb.t)
+
+    def pairs(self, long oid):
+        """The object's cached pairs, head first: [(a, b, id), ...]."""
+        cdef TestObj *o = self._obj(oid)
+        cdef cpBBTree *tree = <cpBBTree *>self._index(o.where == 2)
+        cdef Node *leaf = <Node *>cpHashSetFind(tree.leaves, o.hashid, o)
+        cdef Pair *pair
+        out = []
+        if leaf == NULL:
+            return out
+        pair = leaf.node.leaf.pairs
+        while pair != NULL:
+            out.append(((<TestObj *>pair.a.leaf.obj).id, (<TestObj *>pair.b.leaf.obj).id, pair.id))
+            pair = pair.a.next if pair.a.leaf == leaf else pair.b.next
+        return out
+
+    def structure(self, bint static=False):
+        """The tree as nested tuples of object ids (A, B), or None when empty."""
+        return _structure((<cpBBTree *>self._index(static)).root)
+
+    def check(self, bint static=False):
+        """Check parent links and that every internal box is the merge of its children."""
+        cdef cpBBTree *tree = <cpBBTree *>self._index(static)
+        if tree.root != NULL and tree.root.parent != NULL:
+            raise AssertionError("root has a parent")
+        return _check(tree.root)
+
+    @property
+    def stamp(self):
+        return (<cpBBTree *>self.dynamic_index).stamp
+
+
+cdef object _structure(Node *node):
+    if node == NULL:
+        return None
+    if NodeIsLeaf(node):
+        return (<TestObj *>node.obj).id
+    return (_structure(node.node.children.a), _structure(node.node.children.b))
+
+
+cdef int _check(Node *node) except -1:
+    cdef cpBB m
+    if node == NULL or NodeIsLeaf(node):
+        return 1 if node != NULL else 0
+    if node.node.children.a.parent != node or node.node.children.b.parent != node:
+        raise AssertionError("broken parent link")
+    m = cpBBMerge(node.node.children.a.bb, node.node.children.b.bb)
+    if not (m.l == node.bb.l and m.b == node.bb.b and m.r == node.bb.r and m.t == node.bb.t):
+        raise AssertionError("internal box is not the merge of its children")
+    return _check(node.node.children.a) + _check(node.node.children.b)

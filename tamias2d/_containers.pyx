@@ -1,0 +1,588 @@
+"""Containers under the space and the broad phase: a growable pointer array and
+a chained hash set, ported from Munk2D's cpArray.c and cpHashSet.c.
+
+Their iteration orders are part of the engine's behaviour (they decide the
+order in which the broad phase updates leaves and thus the solver order), so
+they follow Munk2D exactly: swap-with-last removal in the array; in the hash
+set, prime table sizes, head insertion into buckets, growth when the entry
+count reaches the table size, and traversal bucket by bucket, chain head to
+tail.
+
+The classes ``_TestArray`` and ``_TestHashSet`` are thin test-only wrappers;
+the engine uses the C functions declared in ``_containers.pxd``.
+"""
+from libc.stdlib cimport calloc, realloc, free
+from libc.stdint cimport uintptr_t
+
+# -- allocation ----------------------------------------------------------------
+# Test hook: when _fail_after >= 0, that many more allocations succeed, then the
+# next _fail_count ones fail. Lets the tests reach the out-of-memory paths.
+cdef long _fail_after = -1
+cdef long _fail_count = 0
+cdef bint _out_of_memory = False
+
+
+cdef inline bint _should_fail() noexcept nogil:
+    global _fail_after, _fail_count
+    if _fail_after < 0:
+        return False
+    if _fail_after > 0:
+        _fail_after -= 1
+        return False
+    if _fail_count > 0:
+        _fail_count -= 1
+        if _fail_count == 0:
+            _fail_after = -1
+        return True
+    _fail_after = -1
+    return False
+
+
+cdef void *cpcalloc(size_t count, size_t size) noexcept nogil:
+    cdef void *ptr = NULL
+    if not _should_fail():
+        ptr = calloc(count, size)
+    if ptr == NULL:
+        cpSetOutOfMemory()
+    return ptr
+
+
+cdef void *cprealloc(void *ptr, size_t size) noexcept nogil:
+    cdef void *out = NULL
+    if not _should_fail():
+        out = realloc(ptr, size)
+    if out == NULL:
+        cpSetOutOfMemory()
+    return out
+
+
+cdef void cpfree(void *ptr) noexcept nogil:
+    free(ptr)
+
+
+cdef void cpSetOutOfMemory() noexcept nogil:
+    global _out_of_memory
+    _out_of_memory = True
+
+
+cdef bint cpOutOfMemory() noexcept nogil:
+    return _out_of_memory
+
+
+cdef bint cpTakeOutOfMemory() noexcept nogil:
+    global _out_of_memory
+    cdef bint flag = _out_of_memory
+    _out_of_memory = False
+    return flag
+
+
+def _set_alloc_failure(long after, long count=1):
+    """Test hook: let `after` more C allocations succeed, then fail `count`.
+
+    A negative `after` switches the hook off.
+
+    >>> _set_alloc_failure(-1)
+    """
+    global _fail_after, _fail_count
+    if after < 0 or count <= 0:
+        _fail_after = -1
+        _fail_count = 0
+    else:
+        _fail_after = after
+        _fail_count = count
+
+
+def _take_out_of_memory():
+    """Test hook: read and clear the sticky out-of-memory flag.
+
+    >>> _take_out_of_memory()
+    False
+    """
+    return bool(cpTakeOutOfMemory())
+
+
+# -- cpArray ---------------------------------------------------------------------
+cdef cpArray *cpArrayNew(int size) noexcept nogil:
+    cdef cpArray *arr = <cpArray *>cpcalloc(1, sizeof(cpArray))
+    if arr == NULL:
+        return NULL
+    arr.num = 0
+    arr.max = size if size else 4
+    arr.arr = <void **>cpcalloc(arr.max, sizeof(void *))
+    if arr.arr == NULL:
+        free(arr)
+        return NULL
+    return arr
+
+
+cdef void cpArrayFree(cpArray *arr) noexcept nogil:
+    if arr != NULL:
+        free(arr.arr)
+        arr.arr = NULL
+        free(arr)
+
+
+cdef cpBool cpArrayPush(cpArray *arr, void *object) noexcept nogil:
+    cdef int new_max
+    cdef void **grown
+    if arr.num == arr.max:
+        # Same growth rule as Munk2D (about 1.5x), so capacities match.
+        new_max = 3 * (arr.max + 1) // 2
+        grown = <void **>cprealloc(arr.arr, new_max * sizeof(void *))
+        if grown == NULL:
+            return 0
+        arr.arr = grown
+        arr.max = new_max
+    arr.arr[arr.num] = object
+    arr.num += 1
+    return 1
+
+
+cdef void *cpArrayPop(cpArray *arr) noexcept nogil:
+    arr.num -= 1
+    cdef void *value = arr.arr[arr.num]
+    arr.arr[arr.num] = NULL
+    return value
+
+
+cdef void cpArrayDeleteObj(cpArray *arr, void *obj) noexcept nogil:
+    cdef int i
+    for i in range(arr.num):
+        if arr.arr[i] == obj:
+            # The last element takes the freed slot: order changes on purpose.
+            arr.num -= 1
+            arr.arr[i] = arr.arr[arr.num]
+            arr.arr[arr.num] = NULL
+            return
+
+
+cdef void cpArrayFreeEach(cpArray *arr, cpArrayFreeFunc freeFunc) noexcept nogil:
+    cdef int i
+    for i in range(arr.num):
+        freeFunc(arr.arr[i])
+
+
+cdef cpBool cpArrayContains(cpArray *arr, void *ptr) noexcept nogil:
+    cdef int i
+    for i in range(arr.num):
+        if arr.arr[i] == ptr:
+            return 1
+    return 0
+
+
+# -- prime.h ---------------------------------------------------------------------
+# Table sizes, each roughly twice the one before.
+cdef int[29] _primes = [
+    5, 13, 23, 47, 97, 193, 389, 769, 1543, 3079, 6151, 12289, 24593, 49157,
+    98317, 196613, 393241, 786433, 1572869, 3145739, 6291469, 12582917,
+    25165843, 50331653, 100663319, 201326611, 402653189, 805306457, 1610612741,
+]
+
+
+cdef int next_prime(int n) noexcept nogil:
+    cdef int i = 0
+    while n > _primes[i]:
+        i += 1
+        if i == 29:
+            return 0
+    return _primes[i]
+
+
+# -- cpHashSet -------------------------------------------------------------------
+cdef void cpHashSetFree(cpHashSet *set) noexcept nogil:
+    cdef int i
+    if set != NULL:
+        free(set.table)
+        if set.allocatedBuffers != NULL:
+            for i in range(set.allocatedBuffers.num):
+                free(set.allocatedBuffers.arr[i])
+            cpArrayFree(set.allocatedBuffers)
+        free(set)
+
+
+cdef cpHashSet *cpHashSetNew(int size, cpHashSetEqlFunc eqlFunc) noexcept nogil:
+    cdef int prime = next_prime(size)
+    if prime == 0:
+        cpSetOutOfMemory()
+        return NULL
+    cdef cpHashSet *set = <cpHashSet *>cpcalloc(1, sizeof(cpHashSet))
+    if set == NULL:
+        return NULL
+    set.size = prime
+    set.entries = 0
+    set.eql = eqlFunc
+    set.default_value = NULL
+    set.table = <cpHashSetBin **>cpcalloc(set.size, sizeof(cpHashSetBin *))
+    set.pooledBins = NULL
+    set.allocatedBuffers = cpArrayNew(0)
+    if set.table == NULL or set.allocatedBuffers == NULL:
+        cpHashSetFree(set)
+        return NULL
+    return set
+
+
+cdef void cpHashSetSetDefaultValue(cpHashSet *set, void *default_value) noexcept nogil:
+    set.default_value = default_value
+
+
+cdef void _cpHashSetResize(cpHashSet *set) noexcept nogil:
+    cdef unsigned int new_size = next_prime(set.size + 1)
+    if new_size == 0:
+        # Past the largest prime: keep the table, chains just get longer.
+        cpSetOutOfMemory()
+        return
+    cdef cpHashSetBin **new_table = <cpHashSetBin **>cpcalloc(new_size, sizeof(cpHashSetBin *))
+    if new_table == NULL:
+        # The old table stays valid; only the order no longer matches Munk2D.
+        return
+    cdef unsigned int i
+    cdef cpHashSetBin *bin
+    cdef cpHashSetBin *next_bin
+    cdef cpHashValue idx
+    # Walk the old buckets in order and push each bin on the head of its new
+    # bucket; this reverses relative order inside a bucket, as upstream does.
+    for i in range(set.size):
+        bin = set.table[i]
+        while bin != NULL:
+            next_bin = bin.next
+            idx = bin.hash % new_size
+            bin.next = new_table[idx]
+            new_table[idx] = bin
+            bin = next_bin
+    free(set.table)
+    set.table = new_table
+    set.size = new_size
+
+
+cdef inline void _recycleBin(cpHashSet *set, cpHashSetBin *bin) noexcept nogil:
+    bin.next = set.pooledBins
+    set.pooledBins = bin
+    bin.elt = NULL
+
+
+cdef cpHashSetBin *_getUnusedBin(cpHashSet *set) noexcept nogil:
+    cdef cpHashSetBin *bin = set.pooledBins
+    cdef int count, i
+    cdef cpHashSetBin *block
+    if bin != NULL:
+        set.pooledBins = bin.next
+        return bin
+    # Pool empty: carve one 32 KiB block into bins, hand out the first.
+    count = CP_BUFFER_BYTES // sizeof(cpHashSetBin)
+    block = <cpHashSetBin *>cpcalloc(1, CP_BUFFER_BYTES)
+    if block == NULL:
+        return NULL
+    if not cpArrayPush(set.allocatedBuffers, block):
+        free(block)
+        return NULL
+    for i in range(1, count):
+        _recycleBin(set, block + i)
+    return block
+
+
+cdef int cpHashSetCount(cpHashSet *set) noexcept nogil:
+    return set.entries
+
+
+cdef const void *cpHashSetInsert(cpHashSet *set, cpHashValue hash, const void *ptr,
+                                 cpHashSetTransFunc trans, void *data) noexcept nogil:
+    cdef cpHashValue idx = hash % set.size
+    cdef cpHashSetBin *bin = set.table[idx]
+    cdef void *elt
+    while bin != NULL and not set.eql(ptr, bin.elt):
+        bin = bin.next
+    if bin == NULL:
+        bin = _getUnusedBin(set)
+        if bin == NULL:
+            return NULL
+        elt = trans(ptr, data) if trans != NULL else data
+        if elt == NULL and trans != NULL:
+            # The element could not be made (out of memory in trans).
+            _recycleBin(set, bin)
+            return NULL
+        bin.hash = hash
+        bin.elt = elt
+        bin.next = set.table[idx]
+        set.table[idx] = bin
+        set.entries += 1
+        if set.entries >= set.size:
+            _cpHashSetResize(set)
+    return bin.elt
+
+
+cdef const void *cpHashSetRemove(cpHashSet *set, cpHashValue hash, const void *ptr) noexcept nogil:
+    cdef cpHashValue idx = hash % set.size
+    cdef cpHashSetBin **prev_ptr = &set.table[idx]
+    cdef cpHashSetBin *bin = set.table[idx]
+    cdef const void *elt
+    while bin != NULL and not set.eql(ptr, bin.elt):
+        prev_ptr = &bin.next
+        bin = bin.next
+    if bin != NULL:
+        prev_ptr[0] = bin.next
+        set.entries -= 1
+        elt = bin.elt
+        _recycleBin(set, bin)
+        return elt
+    return NULL
+
+
+cdef const void *cpHashSetFind(cpHashSet *set, cpHashValue hash, const void *ptr) noexcept nogil:
+    cdef cpHashValue idx = hash % set.size
+    cdef cpHashSetBin *bin = set.table[idx]
+    while bin != NULL and not set.eql(ptr, bin.elt):
+        bin = bin.next
+    return bin.elt if bin != NULL else set.default_value
+
+
+cdef void cpHashSetEach(cpHashSet *set, cpHashSetIteratorFunc func, void *data) noexcept nogil:
+    cdef unsigned int i
+    cdef cpHashSetBin *bin
+    cdef cpHashSetBin *next_bin
+    for i in range(set.size):
+        bin = set.table[i]
+        while bin != NULL:
+            # Read the link first: the callback may remove the current element.
+            next_bin = bin.next
+            func(bin.elt, data)
+            bin = next_bin
+
+
+cdef void cpHashSetFilter(cpHashSet *set, cpHashSetFilterFunc func, void *data) noexcept nogil:
+    cdef unsigned int i
+    cdef cpHashSetBin **prev_ptr
+    cdef cpHashSetBin *bin
+    cdef cpHashSetBin *next_bin
+    for i in range(set.size):
+        prev_ptr = &set.table[i]
+        bin = set.table[i]
+        while bin != NULL:
+            next_bin = bin.next
+            if func(bin.elt, data):
+                prev_ptr = &bin.next
+            else:
+                prev_ptr[0] = next_bin
+                set.entries -= 1
+                _recycleBin(set, bin)
+            bin = next_bin
+
+
+# -- test-only wrappers ------------------------------------------------------------
+cdef void _noop_free(void *ptr) noexcept nogil:
+    pass
+
+
+cdef class _TestArray:
+    """Test-only view of a cpArray holding small integers as pointers.
+
+    >>> a = _TestArray()
+    >>> for i in (1, 2, 3, 4): a.push(i)
+    >>> a.delete(1); a.to_list()
+    [4, 2, 3]
+    """
+    cdef cpArray *arr
+
+    def __cinit__(self, int size=0):
+        self.arr = cpArrayNew(size)
+        if self.arr == NULL:
+            cpTakeOutOfMemory()
+            raise MemoryError("cpArrayNew failed")
+
+    def __dealloc__(self):
+        cpArrayFree(self.arr)
+
+    def push(self, uintptr_t value):
+        if not cpArrayPush(self.arr, <void *>value):
+            cpTakeOutOfMemory()
+            raise MemoryError("cpArrayPush failed")
+
+    def pop(self):
+        if self.arr.num == 0:
+            raise IndexError("pop from an empty array")
+        return <uintptr_t>cpArrayPop(self.arr)
+
+    def delete(self, uintptr_t value):
+        cpArrayDeleteObj(self.arr, <void *>value)
+
+    def contains(self, uintptr_t value):
+        return bool(cpArrayContains(self.arr, <void *>value))
+
+    def free_each_noop(self):
+        cpArrayFreeEach(self.arr, _noop_free)
+
+    def to_list(self):
+        return [<uintptr_t>self.arr.arr[i] for i in range(self.arr.num)]
+
+    def slots(self):
+        """Every slot up to the capacity (cleared slots read 0)."""
+        return [<uintptr_t>self.arr.arr[i] for i in range(self.arr.max)]
+
+    @property
+    def num(self):
+        return self.arr.num
+
+    @property
+    def max(self):
+        return self.arr.max
+
+
+cdef cpBool _int_eql(const void *ptr, const void *elt) noexcept nogil:
+    return ptr == elt
+
+
+cdef void *_int_trans(const void *ptr, void *data) noexcept nogil:
+    (<long *>data)[0] += 1
+    return <void *>ptr
+
+
+cdef void _int_collect(void *elt, void *data) noexcept nogil:
+    cdef cpArray *out = <cpArray *>data
+    cpArrayPush(out, elt)
+
+
+cdef struct _RemoveCtx:
+    cpHashSet *set
+    cpArray *out
+
+
+cdef void _int_collect_remove(void *elt, void *data) noexcept nogil:
+    # Removes the element being visited, as cpSpace's iterators may.
+    cdef _RemoveCtx *ctx = <_RemoveCtx *>data
+    cpArrayPush(ctx.out, elt)
+    cpHashSetRemove(ctx.set, <cpHashValue>elt, elt)
+
+
+cdef struct _FilterCtx:
+    cpArray *visited
+    uintptr_t modulus
+    uintptr_t drop_residue
+
+
+cdef cpBool _int_filter(void *elt, void *data) noexcept nogil:
+    cdef _FilterCtx *ctx = <_FilterCtx *>data
+    cpArrayPush(ctx.visited, elt)
+    return (<uintptr_t>elt) % ctx.modulus != ctx.drop_residue
+
+
+cdef class _TestHashSet:
+    """Test-only view of a cpHashSet whose elements are nonzero integers.
+
+    The element's own value is the key compared by the set; the hash is given
+    separately, so tests control the bucket of every element.
+
+    >>> s = _TestHashSet()
+    >>> s.size
+    5
+    >>> for k in (1, 6, 2): _ = s.insert(k, k)
+    >>> s.items()   # bucket 1 holds 6 then 1 (head insertion), bucket 2 holds 2
+    [6, 1, 2]
+    """
+    cdef cpHashSet *set
+    cdef long trans_calls
+
+    def __cinit__(self, int size=0):
+        self.set = cpHashSetNew(size, _int_eql)
+        if self.set == NULL:
+            cpTakeOutOfMemory()
+            raise MemoryError("cpHashSetNew failed")
+
+    def __dealloc__(self):
+        cpHashSetFree(self.set)
+
+    def insert(self, cpHashValue hash, uintptr_t key, bint use_trans=False):
+        """Insert key (stored through a trans func if use_trans); return the stored element."""
+        cdef const void *out
+        if key == 0:
+            raise ValueError("keys must be nonzero")
+        if use_trans:
+            out = cpHashSetInsert(self.set, hash, <void *>key, _int_trans, &self.trans_calls)
+        else:
+            out = cpHashSetInsert(self.set, hash, <void *>key, NULL, <void *>key)
+        if out == NULL:
+            cpTakeOutOfMemory()
+            raise MemoryError("cpHashSetInsert failed")
+        return <uintptr_t>out
+
+    def remove(self, cpHashValue hash, uintptr_t key):
+        return <uintptr_t>cpHashSetRemove(self.set, hash, <void *>key)
+
+    def find(self, cpHashValue hash, uintptr_t key):
+        return <uintptr_t>cpHashSetFind(self.set, hash, <void *>key)
+
+    def set_default(self, uintptr_t value):
+        cpHashSetSetDefaultValue(self.set, <void *>value)
+
+    def items(self):
+        """Elements in cpHashSetEach order."""
+        cdef cpArray *out = cpArrayNew(0)
+        cpHashSetEach(self.set, _int_collect, out)
+        result = [<uintptr_t>out.arr[i] for i in range(out.num)]
+        cpArrayFree(out)
+        return result
+
+    def items_removing(self):
+        """Visit in cpHashSetEach order, removing each element (hash = key) as it is visited."""
+        cdef _RemoveCtx ctx
+        ctx.set = self.set
+        ctx.out = cpArrayNew(0)
+        cpHashSetEach(self.set, _int_collect_remove, &ctx)
+        result = [<uintptr_t>ctx.out.arr[i] for i in range(ctx.out.num)]
+        cpArrayFree(ctx.out)
+        return result
+
+    def filter(self, uintptr_t modulus, uintptr_t drop_residue):
+        """Drop elements with key % modulus == drop_residue; return the visit order."""
+        cdef _FilterCtx ctx
+        ctx.visited = cpArrayNew(0)
+        ctx.modulus = modulus
+        ctx.drop_residue = drop_residue
+        cpHashSetFilter(self.set, _int_filter, &ctx)
+        result = [<uintptr_t>ctx.visited.arr[i] for i in range(ctx.visited.num)]
+        cpArrayFree(ctx.visited)
+        return result
+
+    def buckets(self):
+        """The table as a list of chains (head first)."""
+        cdef cpHashSetBin *bin
+        table = []
+        for i in range(self.set.size):
+            chain = []
+            bin = self.set.table[i]
+            while bin != NULL:
+                chain.append(<uintptr_t>bin.elt)
+                bin = bin.next
+            table.append(chain)
+        return table
+
+    def pooled_bins(self):
+        cdef long n = 0
+        cdef cpHashSetBin *bin = self.set.pooledBins
+        while bin != NULL:
+            n += 1
+            bin = bin.next
+        return n
+
+    @property
+    def size(self):
+        return self.set.size
+
+    @property
+    def count(self):
+        return cpHashSetCount(self.set)
+
+    @property
+    def blocks(self):
+        return self.set.allocatedBuffers.num
+
+    @property
+    def trans_calls(self):
+        return self.trans_calls
+
+
+def _next_prime(int n):
+    """Test hook for prime.h's next_prime (0 past the table).
+
+    >>> _next_prime(6)
+    13
+    """
+    return next_prime(n)
