@@ -9,3 +9,4 @@ version = "0.1.0"
 chipmunk_version = "2.0.1-tamias2d"
 
 from . import errors
+from .space_debug_draw_options import SpaceDebugDrawOptions
