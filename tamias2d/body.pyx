@@ -1,0 +1,1198 @@
+# Rigid Body module (MIS section 6): the C body of Munk2D's cpBody.c and the
+# body half of cpSpaceComponent.c, then the Python Body with pymunk 7.3's API.
+# Arithmetic keeps the C association exactly, so results match pymunk bit for
+# bit; see munk2d-inventory.md, group 4.
+import copyreg
+import weakref
+from collections.abc import KeysView
+
+from cpython.ref cimport PyObject, Py_INCREF
+from libc.math cimport INFINITY
+from libc.stdint cimport uintptr_t
+from libc.string cimport memset
+
+from tamias2d._config cimport cpFloat, cpBool
+from tamias2d._structs cimport (cpBody, cpShape, cpSpace, cpArbiter, cpBodyType,
+    cpConstraint, cpArbiterThread, cpShapeMassInfo,
+    CP_BODY_TYPE_DYNAMIC, CP_BODY_TYPE_KINEMATIC, CP_BODY_TYPE_STATIC)
+from tamias2d.vector cimport (cpVect, cpTransform, cpv, cpvadd, cpvsub, cpvneg,
+    cpvmult, cpvcross, cpvforangle, cpvdistsq, cpvlerp, cpTransformNewTranspose,
+    cpTransformPoint, cpTransformVect, vec2d_from_cpv, cpv_from_object)
+
+from tamias2d.errors import IllegalBody, SpaceLocked, NotInSpace
+
+cdef extern from "Python.h":
+    void PyErr_Restore(PyObject *type, PyObject *value, PyObject *tb)
+    void PyErr_WriteUnraisable(object obj)
+
+__all__ = ["Body"]
+
+# pymunk keeps these on the class only; the module-level names are a
+# convenience for `from tamias2d.body import DYNAMIC`.
+DYNAMIC = <int>CP_BODY_TYPE_DYNAMIC
+KINEMATIC = <int>CP_BODY_TYPE_KINEMATIC
+STATIC = <int>CP_BODY_TYPE_STATIC
+
+
+# -- private helpers of chipmunk_private.h ----------------------------------------
+cdef inline cpArbiter *_arbiter_next(cpArbiter *node, cpBody *body) noexcept nogil:
+    return node.thread_a.next if node.body_a == body else node.thread_b.next
+
+cdef inline cpConstraint *_constraint_next(cpConstraint *node, cpBody *body) noexcept nogil:
+    return node.next_a if node.a == body else node.next_b
+
+cdef inline void _apply_impulse(cpBody *body, cpVect j, cpVect r) noexcept nogil:
+    body.v = cpvadd(body.v, cpvmult(j, body.m_inv))
+    body.w += body.i_inv * cpvcross(r, j)
+
+
+# -- space hooks ---------------------------------------------------------------------
+# Zero until the space module installs its table (C statics start zeroed).
+cdef tamias_BodySpaceHooks _hooks
+
+cdef void tamias_set_body_space_hooks(const tamias_BodySpaceHooks *hooks) noexcept nogil:
+    _hooks = hooks[0]
+
+
+# -- cpBody.c --------------------------------------------------------------------------
+cdef cpBody *cpBodyInit(cpBody *body, cpFloat mass, cpFloat moment) noexcept nogil:
+    body.space = NULL
+    body.shapeList = NULL
+    body.arbiterList = NULL
+    body.constraintList = NULL
+
+    body.velocity_func = cpBodyUpdateVelocity
+    body.position_func = cpBodyUpdatePosition
+
+    body.sleeping.root = NULL
+    body.sleeping.next = NULL
+    body.sleeping.idleTime = 0.0
+
+    body.p = cpv(0.0, 0.0)
+    body.v = cpv(0.0, 0.0)
+    body.f = cpv(0.0, 0.0)
+    body.w = 0.0
+    body.t = 0.0
+    body.v_bias = cpv(0.0, 0.0)
+    body.w_bias = 0.0
+    body.userData = NULL
+
+    # As in Munk2D, the setters come last; cog is left as it was (zeroed
+    # memory for a new body) and the angle setter builds the transform.
+    cpBodySetMass(body, mass)
+    cpBodySetMoment(body, moment)
+    cpBodySetAngle(body, 0.0)
+    return body
+
+
+cdef void cpBodySetType(cpBody *body, cpBodyType type) noexcept nogil:
+    cdef cpBodyType oldType = cpBodyGetType(body)
+    if oldType == type:
+        return
+
+    # Static bodies are marked by an infinite idle time; the others restart it.
+    body.sleeping.idleTime = INFINITY if type == CP_BODY_TYPE_STATIC else 0.0
+
+    if type == CP_BODY_TYPE_DYNAMIC:
+        body.m = 0.0
+        body.i = 0.0
+        body.m_inv = INFINITY
+        body.i_inv = INFINITY
+        cpBodyAccumulateMassFromShapes(body)
+    else:
+        body.m = INFINITY
+        body.i = INFINITY
+        body.m_inv = 0.0
+        body.i_inv = 0.0
+        body.v = cpv(0.0, 0.0)
+        body.w = 0.0
+
+    cdef cpSpace *space = body.space
+    if space != NULL:
+        # Munk2D leaves a body that was static asleep-free: no activation.
+        if oldType != CP_BODY_TYPE_STATIC:
+            cpBodyActivate(body)
+        if _hooks.body_type_changed != NULL:
+            _hooks.body_type_changed(space, body, oldType, type)
+
+
+cdef void cpBodyAccumulateMassFromShapes(cpBody *body) noexcept nogil:
+    if body == NULL or cpBodyGetType(body) != CP_BODY_TYPE_DYNAMIC:
+        return
+
+    body.m = 0.0
+    body.i = 0.0
+    body.cog = cpv(0.0, 0.0)
+
+    # The origin must not move, so remember it and put it back at the end.
+    cdef cpVect pos = cpBodyGetPosition(body)
+    cdef cpShape *shape = body.shapeList
+    cdef const cpShapeMassInfo *info
+    cdef cpFloat m, msum
+    while shape != NULL:
+        info = &shape.massInfo
+        m = info.m
+        if m > 0.0:
+            msum = body.m + m
+            # Parallel-axis merge of the shape into the running total.
+            body.i += m * info.i + cpvdistsq(body.cog, info.cog) * (m * body.m) / msum
+            body.cog = cpvlerp(body.cog, info.cog, m / msum)
+            body.m = msum
+        shape = shape.next
+
+    body.m_inv = 1.0 / body.m
+    body.i_inv = 1.0 / body.i
+
+    cpBodySetPosition(body, pos)
+
+
+cdef void cpBodySetMass(cpBody *body, cpFloat mass) noexcept nogil:
+    cpBodyActivate(body)
+    body.m = mass
+    body.m_inv = INFINITY if mass == 0.0 else 1.0 / mass
+
+
+cdef void cpBodySetMoment(cpBody *body, cpFloat moment) noexcept nogil:
+    cpBodyActivate(body)
+    body.i = moment
+    body.i_inv = INFINITY if moment == 0.0 else 1.0 / moment
+
+
+cdef void cpBodyAddShape(cpBody *body, cpShape *shape) noexcept nogil:
+    # Head insertion: the list runs in reverse add order, and so does the
+    # mass accumulation.
+    cdef cpShape *next = body.shapeList
+    if next != NULL:
+        next.prev = shape
+    shape.next = next
+    body.shapeList = shape
+    if shape.massInfo.m > 0.0:
+        cpBodyAccumulateMassFromShapes(body)
+
+
+cdef void cpBodyRemoveShape(cpBody *body, cpShape *shape) noexcept nogil:
+    cdef cpShape *prev = shape.prev
+    cdef cpShape *next = shape.next
+    if prev != NULL:
+        prev.next = next
+    else:
+        body.shapeList = next
+    if next != NULL:
+        next.prev = prev
+    shape.prev = NULL
+    shape.next = NULL
+    if cpBodyGetType(body) == CP_BODY_TYPE_DYNAMIC and shape.massInfo.m > 0.0:
+        cpBodyAccumulateMassFromShapes(body)
+
+
+cdef cpConstraint *_filter_constraints(cpConstraint *node, cpBody *body,
+                                       cpConstraint *filter) noexcept nogil:
+    if node == filter:
+        return _constraint_next(node, body)
+    elif node.a == body:
+        node.next_a = _filter_constraints(node.next_a, body, filter)
+    else:
+        node.next_b = _filter_constraints(node.next_b, body, filter)
+    return node
+
+
+cdef void cpBodyRemoveConstraint(cpBody *body, cpConstraint *constraint) noexcept nogil:
+    body.constraintList = _filter_constraints(body.constraintList, body, constraint)
+
+
+# p is the world position of the centre of gravity; the origin follows from it.
+cdef inline void _set_transform(cpBody *body, cpVect p, cpFloat a) noexcept nogil:
+    cdef cpVect rot = cpvforangle(a)
+    cdef cpVect c = body.cog
+    body.transform = cpTransformNewTranspose(
+        rot.x, -rot.y, p.x - (c.x * rot.x - c.y * rot.y),
+        rot.y, rot.x, p.y - (c.x * rot.y + c.y * rot.x))
+
+
+cdef void cpBodySetPosition(cpBody *body, cpVect position) noexcept nogil:
+    cpBodyActivate(body)
+    body.p = cpvadd(cpTransformVect(body.transform, body.cog), position)
+    _set_transform(body, body.p, body.a)
+
+
+cdef void cpBodySetCenterOfGravity(cpBody *body, cpVect cog) noexcept nogil:
+    # The transform is not rebuilt: the origin jumps at the next position
+    # update, as in Munk2D.
+    cpBodyActivate(body)
+    body.cog = cog
+
+
+cdef void cpBodySetVelocity(cpBody *body, cpVect velocity) noexcept nogil:
+    cpBodyActivate(body)
+    body.v = velocity
+
+
+cdef void cpBodySetForce(cpBody *body, cpVect force) noexcept nogil:
+    cpBodyActivate(body)
+    body.f = force
+
+
+cdef void cpBodySetAngle(cpBody *body, cpFloat angle) noexcept nogil:
+    # Rotates about the centre of gravity, which stays in place.
+    cpBodyActivate(body)
+    body.a = angle
+    _set_transform(body, body.p, angle)
+
+
+cdef void cpBodySetAngularVelocity(cpBody *body, cpFloat angularVelocity) noexcept nogil:
+    cpBodyActivate(body)
+    body.w = angularVelocity
+
+
+cdef void cpBodySetTorque(cpBody *body, cpFloat torque) noexcept nogil:
+    cpBodyActivate(body)
+    body.t = torque
+
+
+cdef void cpBodyUpdateVelocity(cpBody *body, cpVect gravity, cpFloat damping, cpFloat dt) noexcept nogil:
+    # Kinematic bodies move only by the velocity they are given.
+    if cpBodyGetType(body) == CP_BODY_TYPE_KINEMATIC:
+        return
+    body.v = cpvadd(cpvmult(body.v, damping),
+                    cpvmult(cpvadd(gravity, cpvmult(body.f, body.m_inv)), dt))
+    body.w = body.w * damping + body.t * body.i_inv * dt
+    body.f = cpv(0.0, 0.0)
+    body.t = 0.0
+
+
+cdef void cpBodyUpdatePosition(cpBody *body, cpFloat dt) noexcept nogil:
+    body.p = cpvadd(body.p, cpvmult(cpvadd(body.v, body.v_bias), dt))
+    body.a = body.a + (body.w + body.w_bias) * dt
+    _set_transform(body, body.p, body.a)
+    body.v_bias = cpv(0.0, 0.0)
+    body.w_bias = 0.0
+
+
+cdef void cpBodyApplyForceAtWorldPoint(cpBody *body, cpVect force, cpVect point) noexcept nogil:
+    cpBodyActivate(body)
+    body.f = cpvadd(body.f, force)
+    cdef cpVect r = cpvsub(point, cpTransformPoint(body.transform, body.cog))
+    body.t += cpvcross(r, force)
+
+
+cdef void cpBodyApplyForceAtLocalPoint(cpBody *body, cpVect force, cpVect point) noexcept nogil:
+    cpBodyApplyForceAtWorldPoint(body, cpTransformVect(body.transform, force),
+                                 cpTransformPoint(body.transform, point))
+
+
+cdef void cpBodyApplyImpulseAtWorldPoint(cpBody *body, cpVect impulse, cpVect point) noexcept nogil:
+    cpBodyActivate(body)
+    cdef cpVect r = cpvsub(point, cpTransformPoint(body.transform, body.cog))
+    _apply_impulse(body, impulse, r)
+
+
+cdef void cpBodyApplyImpulseAtLocalPoint(cpBody *body, cpVect impulse, cpVect point) noexcept nogil:
+    cpBodyApplyImpulseAtWorldPoint(body, cpTransformVect(body.transform, impulse),
+                                   cpTransformPoint(body.transform, point))
+
+
+# -- cpSpaceComponent.c, body side ----------------------------------------------------
+cdef void cpBodyActivate(cpBody *body) noexcept nogil:
+    cdef cpBody *root
+    cdef cpBody *other
+    cdef cpArbiter *arb
+    if body == NULL or cpBodyGetType(body) != CP_BODY_TYPE_DYNAMIC:
+        return
+    body.sleeping.idleTime = 0.0
+
+    root = body.sleeping.root
+    if root != NULL and cpBodyIsSleeping(root):
+        if _hooks.wake_component != NULL:
+            _hooks.wake_component(root.space, root)
+
+    # Restart the idle timers of what the body touches, so nothing is left
+    # asleep in mid-air.
+    arb = body.arbiterList
+    while arb != NULL:
+        other = arb.body_b if arb.body_a == body else arb.body_a
+        if cpBodyGetType(other) != CP_BODY_TYPE_STATIC:
+            other.sleeping.idleTime = 0.0
+        arb = _arbiter_next(arb, body)
+
+
+cdef void cpBodyActivateStatic(cpBody *body, cpShape *filter) noexcept nogil:
+    # Munk2D hard-asserts a static body; callers inside the engine ensure it.
+    if cpBodyGetType(body) != CP_BODY_TYPE_STATIC:
+        return
+    cdef cpArbiter *arb = body.arbiterList
+    while arb != NULL:
+        if filter == NULL or <const cpShape *>filter == arb.a or <const cpShape *>filter == arb.b:
+            cpBodyActivate(arb.body_b if arb.body_a == body else arb.body_a)
+        arb = _arbiter_next(arb, body)
+
+
+cdef void cpBodySleep(cpBody *body) noexcept nogil:
+    cpBodySleepWithGroup(body, NULL)
+
+
+cdef void cpBodySleepWithGroup(cpBody *body, cpBody *group) noexcept nogil:
+    if _hooks.sleep_with_group != NULL:
+        _hooks.sleep_with_group(body, group)
+
+
+# -- integrator trampolines for Python velocity_func / position_func ---------------
+cdef void _write_unraisable(object exc, object where) noexcept:
+    # Hand the exception to sys.unraisablehook with its traceback.
+    cdef object tp = type(exc)
+    cdef object tb = exc.__traceback__
+    Py_INCREF(tp)
+    Py_INCREF(exc)
+    if tb is not None:
+        Py_INCREF(tb)
+    PyErr_Restore(<PyObject *>tp, <PyObject *>exc, <PyObject *>tb if tb is not None else NULL)
+    PyErr_WriteUnraisable(where)
+
+
+cdef void _report_callback_error(cpBody *body, object exc, object where) noexcept:
+    # The Python Space keeps the first error and re-raises it from step().
+    cdef cpSpace *space = body.space
+    if space != NULL and space.userData != NULL:
+        try:
+            (<object>space.userData)._store_callback_error(exc)
+            return
+        except BaseException:
+            pass
+    _write_unraisable(exc, where)
+
+
+cdef void _call_velocity_func(cpBody *body, cpVect gravity, cpFloat damping, cpFloat dt) noexcept:
+    cdef Body py_body
+    if body.userData == NULL:
+        cpBodyUpdateVelocity(body, gravity, damping, dt)
+        return
+    py_body = <Body>body.userData
+    func = py_body._velocity_func
+    if func is None:
+        cpBodyUpdateVelocity(body, gravity, damping, dt)
+        return
+    try:
+        func(py_body, vec2d_from_cpv(gravity), damping, dt)
+    except BaseException as exc:
+        _report_callback_error(body, exc, func)
+
+
+cdef void _call_position_func(cpBody *body, cpFloat dt) noexcept:
+    cdef Body py_body
+    if body.userData == NULL:
+        cpBodyUpdatePosition(body, dt)
+        return
+    py_body = <Body>body.userData
+    func = py_body._position_func
+    if func is None:
+        cpBodyUpdatePosition(body, dt)
+        return
+    try:
+        func(py_body, dt)
+    except BaseException as exc:
+        _report_callback_error(body, exc, func)
+
+
+cdef void tamias_body_velocity_trampoline(cpBody *body, cpVect gravity, cpFloat damping, cpFloat dt) noexcept nogil:
+    with gil:
+        _call_velocity_func(body, gravity, damping, dt)
+
+
+cdef void tamias_body_position_trampoline(cpBody *body, cpFloat dt) noexcept nogil:
+    with gil:
+        _call_position_func(body, dt)
+
+
+# -- Python boundary helpers ---------------------------------------------------------
+cdef inline bint _finite(double x) noexcept nogil:
+    # False for NaN and for both infinities.
+    return x - x == 0.0
+
+
+cdef inline cpVect _finite_vect(object o, str what) except *:
+    cdef cpVect v = cpv_from_object(o)
+    if not (_finite(v.x) and _finite(v.y)):
+        raise IllegalBody("Body %s must be finite, got (%r, %r)." % (what, v.x, v.y))
+    return v
+
+
+cdef inline double _finite_float(object o, str what) except? -1.0:
+    cdef double x = o
+    if not _finite(x):
+        raise IllegalBody("Body %s must be finite, got %r." % (what, x))
+    return x
+
+
+cdef int _body_type_from_object(object body_type) except -1:
+    # Compared as plain ints, as pymunk's == does (so 0.0 and True pass too).
+    if body_type == <int>CP_BODY_TYPE_DYNAMIC:
+        return CP_BODY_TYPE_DYNAMIC
+    elif body_type == <int>CP_BODY_TYPE_KINEMATIC:
+        return CP_BODY_TYPE_KINEMATIC
+    elif body_type == <int>CP_BODY_TYPE_STATIC:
+        return CP_BODY_TYPE_STATIC
+    raise ValueError("body_type must be Body.DYNAMIC, Body.KINEMATIC or Body.STATIC, not %r"
+                     % (body_type,))
+
+
+cdef object _arbiter_factory = None
+
+cdef object _get_arbiter_factory():
+    # Lazy upward import: the space module sits above this one.
+    global _arbiter_factory
+    if _arbiter_factory is None:
+        from tamias2d.space import _arbiter_for_body
+        _arbiter_factory = _arbiter_for_body
+    return _arbiter_factory
+
+
+cdef int _check_can_sleep(Body self, Body group) except -1:
+    # Munk2D's hard asserts of cpBodySleepWithGroup, as exceptions.
+    cdef cpSpace *space = self._body.space
+    cdef cpBody *group_root = NULL
+    if self.space is None or space == NULL:
+        raise NotInSpace("Body not added to space")
+    if cpBodyGetType(&self._body) != CP_BODY_TYPE_DYNAMIC:
+        raise IllegalBody("Non-dynamic bodies cannot be put to sleep.")
+    if space.locked:
+        raise SpaceLocked("Bodies cannot be put to sleep during a query or a step; "
+                          "use a post-step callback.")
+    if not (space.sleepTimeThreshold < INFINITY):
+        raise RuntimeError("Sleeping is not enabled on the space: set a finite "
+                           "Space.sleep_time_threshold first.")
+    if group is not None:
+        if not cpBodyIsSleeping(&group._body):
+            raise IllegalBody("Cannot use a non-sleeping body as a group identifier.")
+        group_root = group._body.sleeping.root
+    if cpBodyIsSleeping(&self._body) and self._body.sleeping.root != group_root:
+        raise IllegalBody("The body is already sleeping and its group cannot be reassigned.")
+    if _hooks.sleep_with_group == NULL:
+        raise RuntimeError("tamias2d.space is not loaded: sleeping needs the space module.")
+    return 0
+
+
+cdef dict _user_dict(Body self):
+    # The instance dict is created lazily by the generic __dict__ getter.
+    return getattr(self, "__dict__")
+
+
+cdef class Body:
+    """A rigid body: mass, moment of inertia, position, angle and their rates.
+
+    ``Body(mass=0, moment=0, body_type=Body.DYNAMIC)``. Mass and moment only
+    matter for dynamic bodies; kinematic and static bodies have infinite mass
+    and moment. A body with mass 0 can get its mass from the density or mass
+    of its shapes once body and shapes are added to a space.
+
+    The position is the body's origin; the body rotates about its centre of
+    gravity (``center_of_gravity``, in body coordinates). Copying or
+    pickling a body copies its state but none of its shapes, constraints or
+    space, and a sleeping body comes back awake.
+
+    >>> import tamias2d
+    >>> b = tamias2d.Body(10, 100)
+    >>> b.position = (3, 4)
+    >>> b.mass, b.moment, b.position
+    (10.0, 100.0, Vec2d(3.0, 4.0))
+    """
+
+    DYNAMIC = <int>CP_BODY_TYPE_DYNAMIC
+    KINEMATIC = <int>CP_BODY_TYPE_KINEMATIC
+    STATIC = <int>CP_BODY_TYPE_STATIC
+
+    # The pickled state, in pymunk's layout (the order of "general" matters:
+    # the centre of gravity is restored after the position, as pymunk does).
+    _pickle_attrs_init = ["mass", "moment", "body_type"]
+    _pickle_attrs_general = ["force", "angle", "position", "center_of_gravity",
+                             "velocity", "angular_velocity", "torque"]
+    _pickle_attrs_skip = ["is_sleeping", "_velocity_func", "_position_func"]
+
+    def __cinit__(self):
+        # A usable C body even before __init__ (unpickling creates the object
+        # first); _shapes stays None until __init__ has run.
+        cpBodyInit(&self._body, 0.0, 0.0)
+        self._body.userData = <void *>self
+        self._space = None
+        self._shapes = None
+        self._velocity_func = None
+        self._position_func = None
+
+    def __init__(self, mass=0, moment=0, body_type=0):
+        cdef int t = _body_type_from_object(body_type)
+        cdef double m = 0.0, i = 0.0
+        if self._body.space != NULL:
+            raise IllegalBody("Cannot re-initialise a body that is in a space.")
+        if t == CP_BODY_TYPE_DYNAMIC:
+            m = mass
+            i = moment
+            if not (0.0 <= m < INFINITY):
+                raise IllegalBody("Mass must be non-negative and finite, got %r." % m)
+            if not (i >= 0.0):
+                raise IllegalBody("Moment of inertia must be non-negative, got %r." % i)
+        # A fresh body every time, as pymunk allocates a new cpBody.
+        memset(&self._body, 0, sizeof(cpBody))
+        cpBodyInit(&self._body, m, i)
+        if t != CP_BODY_TYPE_DYNAMIC:
+            cpBodySetType(&self._body, <cpBodyType>t)
+        self._body.userData = <void *>self
+        self._space = None
+        self._shapes = {}
+        self._velocity_func = None
+        self._position_func = None
+
+    def __repr__(self):
+        cdef cpBodyType t = cpBodyGetType(&self._body)
+        if t == CP_BODY_TYPE_DYNAMIC:
+            return "Body(%r, %r, Body.DYNAMIC)" % (self._body.m, self._body.i)
+        elif t == CP_BODY_TYPE_KINEMATIC:
+            return "Body(Body.KINEMATIC)"
+        return "Body(Body.STATIC)"
+
+    @property
+    def id(self):
+        """A number unique to this body while it lives (a copy gets a new one).
+
+        >>> import tamias2d
+        >>> a, b = tamias2d.Body(), tamias2d.Body()
+        >>> a.id != b.id
+        True
+        """
+        return <uintptr_t>self._body.userData
+
+    # -- mass properties --------------------------------------------------------
+    @property
+    def mass(self):
+        """Mass of the body (infinite for kinematic and static bodies).
+
+        Only dynamic bodies accept a new mass; once the body is in a space the
+        mass must be greater than 0.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 2)
+        >>> b.mass = 5
+        >>> b.mass
+        5.0
+        """
+        return self._body.m
+
+    @mass.setter
+    def mass(self, mass):
+        cdef double m = mass
+        if cpBodyGetType(&self._body) != CP_BODY_TYPE_DYNAMIC:
+            raise IllegalBody("You cannot set the mass of kinematic or static bodies.")
+        if not (0.0 <= m < INFINITY):
+            raise IllegalBody("Mass must be non-negative and finite, got %r." % m)
+        if self._body.space != NULL and not (m > 0.0):
+            raise IllegalBody("Dynamic bodies must have mass > 0 if they are attached to a Space.")
+        cpBodySetMass(&self._body, m)
+
+    @property
+    def moment(self):
+        """Moment of inertia: the body's resistance to angular acceleration.
+
+        ``float('inf')`` makes a body that cannot rotate. Once the body is in
+        a space the moment must be greater than 0.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 2)
+        >>> b.moment = float("inf")
+        >>> b.moment
+        inf
+        """
+        return self._body.i
+
+    @moment.setter
+    def moment(self, moment):
+        cdef double i = moment
+        if not (i >= 0.0):
+            raise IllegalBody("Moment of inertia must be non-negative, got %r." % i)
+        if self._body.space != NULL and not (i > 0.0):
+            raise IllegalBody("Dynamic bodies must have moment > 0 if they are attached to a Space.")
+        cpBodySetMoment(&self._body, i)
+
+    @property
+    def center_of_gravity(self):
+        """Centre of gravity in body coordinates; (0, 0) by default.
+
+        Setting it does not move the body now: the origin shifts at the next
+        position update, exactly as in Chipmunk.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 1)
+        >>> b.center_of_gravity = (1, 2)
+        >>> b.center_of_gravity
+        Vec2d(1.0, 2.0)
+        """
+        return vec2d_from_cpv(self._body.cog)
+
+    @center_of_gravity.setter
+    def center_of_gravity(self, cog):
+        cpBodySetCenterOfGravity(&self._body, _finite_vect(cog, "center_of_gravity"))
+
+    # -- motion state ------------------------------------------------------------
+    @property
+    def position(self):
+        """Position of the body's origin in world coordinates.
+
+        After moving a body in a space, ``Space.reindex_shapes_for_body``
+        brings the shapes' collision data up to date for queries.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 1)
+        >>> b.position = 1, 2
+        >>> b.position
+        Vec2d(1.0, 2.0)
+        """
+        return vec2d_from_cpv(cpBodyGetPosition(&self._body))
+
+    @position.setter
+    def position(self, pos):
+        cpBodySetPosition(&self._body, _finite_vect(pos, "position"))
+
+    @property
+    def velocity(self):
+        """Linear velocity of the centre of gravity.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 1)
+        >>> b.velocity = 3, 4
+        >>> b.velocity
+        Vec2d(3.0, 4.0)
+        """
+        return vec2d_from_cpv(self._body.v)
+
+    @velocity.setter
+    def velocity(self, vel):
+        cpBodySetVelocity(&self._body, _finite_vect(vel, "velocity"))
+
+    @property
+    def force(self):
+        """Force applied at the centre of gravity, cleared after every step.
+
+        It holds only the forces applied by hand, not the contact forces.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 1)
+        >>> b.force = 4, 5
+        >>> b.force
+        Vec2d(4.0, 5.0)
+        """
+        return vec2d_from_cpv(self._body.f)
+
+    @force.setter
+    def force(self, f):
+        cpBodySetForce(&self._body, _finite_vect(f, "force"))
+
+    @property
+    def angle(self):
+        """Rotation of the body in radians, about its centre of gravity.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 1)
+        >>> b.angle = 1.5
+        >>> b.angle
+        1.5
+        """
+        return self._body.a
+
+    @angle.setter
+    def angle(self, angle):
+        cpBodySetAngle(&self._body, _finite_float(angle, "angle"))
+
+    @property
+    def angular_velocity(self):
+        """Angular velocity in radians per second.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 1)
+        >>> b.angular_velocity = 2
+        >>> b.angular_velocity
+        2.0
+        """
+        return self._body.w
+
+    @angular_velocity.setter
+    def angular_velocity(self, w):
+        cpBodySetAngularVelocity(&self._body, _finite_float(w, "angular_velocity"))
+
+    @property
+    def torque(self):
+        """Torque applied to the body, cleared after every step.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 1)
+        >>> b.torque = 1.25
+        >>> b.torque
+        1.25
+        """
+        return self._body.t
+
+    @torque.setter
+    def torque(self, t):
+        cpBodySetTorque(&self._body, _finite_float(t, "torque"))
+
+    @property
+    def rotation_vector(self):
+        """The unit vector (cos angle, sin angle) of the body's rotation.
+
+        >>> import tamias2d
+        >>> tamias2d.Body(1, 1).rotation_vector
+        Vec2d(1.0, 0.0)
+        """
+        return vec2d_from_cpv(cpBodyGetRotation(&self._body))
+
+    @property
+    def kinetic_energy(self):
+        """m|v|^2 + I w^2 (Chipmunk's definition, without the one half).
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(2, 1)
+        >>> b.velocity = 3, 0
+        >>> b.kinetic_energy
+        18.0
+        """
+        return cpBodyKineticEnergy(&self._body)
+
+    # -- type, space and attached objects ----------------------------------------
+    @property
+    def body_type(self):
+        """Body.DYNAMIC, Body.KINEMATIC or Body.STATIC.
+
+        Turning a body dynamic recomputes its mass and moment from its shapes
+        (a hand-set moment is lost); turning it kinematic or static makes them
+        infinite and stops it. Not allowed while its space is stepping.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 1)
+        >>> b.body_type = tamias2d.Body.KINEMATIC
+        >>> b.body_type == tamias2d.Body.KINEMATIC, b.mass
+        (True, inf)
+        """
+        return <int>cpBodyGetType(&self._body)
+
+    @body_type.setter
+    def body_type(self, body_type):
+        cdef int t = _body_type_from_object(body_type)
+        if self._body.space != NULL and self._body.space.locked:
+            raise SpaceLocked("The body type cannot change while the space is locked "
+                              "(during a step or a query); use a post-step callback.")
+        cpBodySetType(&self._body, <cpBodyType>t)
+
+    @property
+    def space(self):
+        """The Space the body was added to, or None.
+
+        >>> import tamias2d
+        >>> tamias2d.Body(1, 1).space is None
+        True
+        """
+        if self._shapes is None:
+            raise IllegalBody(
+                "The body is not initialised. This can mean a direct or indirect "
+                "circular reference between the Body and a Space while copying or "
+                "pickling, which is not supported.")
+        if self._space is None:
+            return None
+        return self._space()
+
+    @property
+    def shapes(self):
+        """A view of the shapes attached to this body.
+
+        >>> import tamias2d
+        >>> tamias2d.Body(1, 1).shapes
+        dict_keys([])
+        """
+        if self._shapes is None:
+            return {}.keys()
+        return self._shapes.keys()
+
+    @property
+    def constraints(self):
+        """A view of the constraints attached to this body (weakly held).
+
+        >>> import tamias2d
+        >>> len(tamias2d.Body(1, 1).constraints)
+        0
+        """
+        cdef dict ud = _user_dict(self)
+        d = ud.get("_constraints")
+        if d is None:
+            d = ud["_constraints"] = weakref.WeakKeyDictionary()
+        return KeysView(d)
+
+    @property
+    def is_sleeping(self):
+        """True while the body sleeps.
+
+        >>> import tamias2d
+        >>> tamias2d.Body(1, 1).is_sleeping
+        False
+        """
+        return <bint>cpBodyIsSleeping(&self._body)
+
+    # -- integrators --------------------------------------------------------------
+    @property
+    def velocity_func(self):
+        """The velocity integrator run at every step.
+
+        Called as ``func(body, gravity, damping, dt)``. Set a Python function
+        to override it, ``Body.update_velocity`` (or None) to restore the
+        built-in one. An exception raised by the function during a step is
+        re-raised by ``Space.step``.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 1)
+        >>> def no_gravity(body, gravity, damping, dt):
+        ...     tamias2d.Body.update_velocity(body, (0, 0), damping, dt)
+        >>> b.velocity_func = no_gravity
+        >>> b.velocity_func is no_gravity
+        True
+        >>> b.velocity_func = None
+        >>> b.velocity_func == tamias2d.Body.update_velocity
+        True
+        """
+        if self._velocity_func is None:
+            return Body.update_velocity
+        return self._velocity_func
+
+    @velocity_func.setter
+    def velocity_func(self, func):
+        if func is None or func is _default_update_velocity:
+            self._velocity_func = None
+            self._body.velocity_func = cpBodyUpdateVelocity
+        elif callable(func):
+            self._velocity_func = func
+            self._body.velocity_func = tamias_body_velocity_trampoline
+        else:
+            raise TypeError("velocity_func must be callable or None, not %r" % (func,))
+
+    @property
+    def position_func(self):
+        """The position integrator run at every step.
+
+        Called as ``func(body, dt)``. Set a Python function to override it,
+        ``Body.update_position`` (or None) to restore the built-in one.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 1)
+        >>> b.position_func == tamias2d.Body.update_position
+        True
+        """
+        if self._position_func is None:
+            return Body.update_position
+        return self._position_func
+
+    @position_func.setter
+    def position_func(self, func):
+        if func is None or func is _default_update_position:
+            self._position_func = None
+            self._body.position_func = cpBodyUpdatePosition
+        elif callable(func):
+            self._position_func = func
+            self._body.position_func = tamias_body_position_trampoline
+        else:
+            raise TypeError("position_func must be callable or None, not %r" % (func,))
+
+    @staticmethod
+    def update_velocity(Body body not None, gravity, double damping, double dt):
+        """The built-in velocity integrator (explicit Euler with damping).
+
+        v = v*damping + (gravity + force/m)*dt, w = w*damping + torque/I*dt,
+        then force and torque are cleared. Kinematic bodies are left alone.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 1)
+        >>> tamias2d.Body.update_velocity(b, (0, -10), 1.0, 0.5)
+        >>> b.velocity
+        Vec2d(0.0, -5.0)
+        """
+        cdef cpVect g = cpv_from_object(gravity)
+        cpBodyUpdateVelocity(&body._body, g, damping, dt)
+
+    @staticmethod
+    def update_position(Body body not None, double dt):
+        """The built-in position integrator (explicit Euler).
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 1)
+        >>> b.velocity = 2, 0
+        >>> tamias2d.Body.update_position(b, 0.5)
+        >>> b.position
+        Vec2d(1.0, 0.0)
+        """
+        cpBodyUpdatePosition(&body._body, dt)
+
+    # -- forces and impulses ---------------------------------------------------------
+    def apply_force_at_world_point(self, force, point):
+        """Add a force, as if applied at a world point (adds torque too).
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 2)
+        >>> b.position = 3, 4
+        >>> b.apply_force_at_world_point((10, 0), (0, 10))
+        >>> b.force, b.torque
+        (Vec2d(10.0, 0.0), -60.0)
+        """
+        cpBodyApplyForceAtWorldPoint(&self._body, _finite_vect(force, "force"),
+                                     _finite_vect(point, "force application point"))
+
+    def apply_force_at_local_point(self, force, point=(0, 0)):
+        """Add a force given in body coordinates, at a body-local point.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 2)
+        >>> b.apply_force_at_local_point((10, 0), (0, 10))
+        >>> b.force, b.torque
+        (Vec2d(10.0, 0.0), -100.0)
+        """
+        cpBodyApplyForceAtLocalPoint(&self._body, _finite_vect(force, "force"),
+                                     _finite_vect(point, "force application point"))
+
+    def apply_impulse_at_world_point(self, impulse, point):
+        """Apply an impulse at a world point: changes the velocities at once.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 2)
+        >>> b.position = 3, 4
+        >>> b.apply_impulse_at_world_point((10, 0), (0, 10))
+        >>> b.velocity, b.angular_velocity
+        (Vec2d(10.0, 0.0), -30.0)
+        """
+        cpBodyApplyImpulseAtWorldPoint(&self._body, _finite_vect(impulse, "impulse"),
+                                       _finite_vect(point, "impulse application point"))
+
+    def apply_impulse_at_local_point(self, impulse, point=(0, 0)):
+        """Apply an impulse given in body coordinates at a body-local point.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 2)
+        >>> b.apply_impulse_at_local_point((10, 0), (0, 10))
+        >>> b.velocity, b.angular_velocity
+        (Vec2d(10.0, 0.0), -50.0)
+        """
+        cpBodyApplyImpulseAtLocalPoint(&self._body, _finite_vect(impulse, "impulse"),
+                                       _finite_vect(point, "impulse application point"))
+
+    # -- coordinates ------------------------------------------------------------------
+    def local_to_world(self, v):
+        """Convert a point from body coordinates to world coordinates.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(body_type=tamias2d.Body.KINEMATIC)
+        >>> b.position = 3, 4
+        >>> b.local_to_world((1, 2))
+        Vec2d(4.0, 6.0)
+        """
+        return vec2d_from_cpv(cpBodyLocalToWorld(&self._body, cpv_from_object(v)))
+
+    def world_to_local(self, v):
+        """Convert a point from world coordinates to body coordinates.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(body_type=tamias2d.Body.KINEMATIC)
+        >>> b.position = 3, 4
+        >>> b.world_to_local((1, 2))
+        Vec2d(-2.0, -2.0)
+        """
+        return vec2d_from_cpv(cpBodyWorldToLocal(&self._body, cpv_from_object(v)))
+
+    def velocity_at_world_point(self, point):
+        """Velocity of the body's material at a world point.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 2)
+        >>> b.position = 1, 2
+        >>> b.angular_velocity = 1.5
+        >>> b.velocity_at_world_point((1, 1))
+        Vec2d(1.5, 0.0)
+        """
+        return vec2d_from_cpv(cpBodyGetVelocityAtWorldPoint(&self._body, cpv_from_object(point)))
+
+    def velocity_at_local_point(self, point):
+        """Velocity of the body's material at a body-local point.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 2)
+        >>> b.angular_velocity = 1.5
+        >>> b.velocity_at_local_point((1, 1))
+        Vec2d(-1.5, 1.5)
+        """
+        return vec2d_from_cpv(cpBodyGetVelocityAtLocalPoint(&self._body, cpv_from_object(point)))
+
+    # -- sleeping -----------------------------------------------------------------------
+    def activate(self):
+        """Restart the idle timer; wake the body (and its group) if it sleeps.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 1)
+        >>> b.activate()
+        >>> b.is_sleeping
+        False
+        """
+        cpBodyActivate(&self._body)
+
+    def sleep(self):
+        """Put the body to sleep now, even in mid-air (in a new group).
+
+        The body must be dynamic and in a space with sleeping enabled
+        (a finite ``sleep_time_threshold``); not from inside a step.
+
+        >>> import tamias2d
+        >>> tamias2d.Body(1, 1).sleep()
+        Traceback (most recent call last):
+        ...
+        tamias2d.errors.NotInSpace: Body not added to space
+        """
+        _check_can_sleep(self, None)
+        cpBodySleepWithGroup(&self._body, NULL)
+
+    def sleep_with_group(self, body):
+        """Put the body to sleep now, in the sleeping group of ``body``.
+
+        When any body of a group is woken, the whole group wakes. With
+        ``body=None`` this is the same as :meth:`sleep`.
+
+        >>> import tamias2d
+        >>> tamias2d.Body(1, 1).sleep_with_group(None)
+        Traceback (most recent call last):
+        ...
+        tamias2d.errors.NotInSpace: Body not added to space
+        """
+        cdef Body group = None
+        if body is not None:
+            if not isinstance(body, Body):
+                raise TypeError("sleep_with_group expects a Body or None, not %r" % (body,))
+            group = <Body>body
+        _check_can_sleep(self, group)
+        if cpBodyIsSleeping(&self._body):
+            return      # same group, checked above
+        cpBodySleepWithGroup(&self._body, &group._body if group is not None else NULL)
+
+    # -- arbiters -----------------------------------------------------------------------
+    def each_arbiter(self, func, *args, **kwargs):
+        """Call ``func(arbiter, *args, **kwargs)`` for each arbiter of the body.
+
+        The arbiters come in Chipmunk's order (the reverse of the solver
+        order), each seen from this body (its first shape is on this body).
+        Do not keep an Arbiter after the call.
+
+        >>> import tamias2d
+        >>> seen = []
+        >>> tamias2d.Body(1, 1).each_arbiter(seen.append)
+        >>> seen
+        []
+        """
+        cdef cpBody *body = &self._body
+        cdef cpArbiter *arb = body.arbiterList
+        cdef cpArbiter *next_arb
+        cdef cpBool swapped
+        if arb == NULL or body.space == NULL:
+            return
+        space = self.space
+        if space is None:
+            return
+        factory = _get_arbiter_factory()
+        while arb != NULL:
+            next_arb = _arbiter_next(arb, body)
+            # Seen from this body while the callback runs, as Munk2D does.
+            swapped = arb.swapped
+            arb.swapped = body == arb.body_b
+            try:
+                func(factory(<uintptr_t>arb, space), *args, **kwargs)
+            finally:
+                arb.swapped = swapped
+            arb = next_arb
+
+    # -- copy and pickle -------------------------------------------------------------------
+    def __getstate__(self):
+        """The body's state as pymunk lays it out (used by copy and pickle).
+
+        >>> import tamias2d
+        >>> sorted(tamias2d.Body(1, 2).__getstate__())
+        ['custom', 'general', 'init', 'special']
+        """
+        cls = type(self)
+        d = {"init": [], "general": [], "custom": [], "special": []}
+        for a in cls._pickle_attrs_init:
+            d["init"].append((a, getattr(self, a)))
+        for a in cls._pickle_attrs_general:
+            d["general"].append((a, getattr(self, a)))
+        for k, v in _user_dict(self).items():
+            if k[0] != "_":
+                d["custom"].append((k, v))
+        d["special"].append(("is_sleeping", self.is_sleeping))
+        d["special"].append(("_velocity_func", self._velocity_func))
+        d["special"].append(("_position_func", self._position_func))
+        return d
+
+    def __setstate__(self, state):
+        """Restore a state made by :meth:`__getstate__` (used by unpickling).
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 2)
+        >>> b.__setstate__(tamias2d.Body(3, 4).__getstate__())
+        >>> b.mass
+        3.0
+        """
+        self.__init__(*[v for k, v in state["init"]])
+        for k, v in state["general"]:
+            setattr(self, k, v)
+        for k, v in state["custom"]:
+            setattr(self, k, v)
+        for k, v in state["special"]:
+            # A sleeping body comes back awake.
+            if k == "_velocity_func" and v is not None:
+                self.velocity_func = v
+            elif k == "_position_func" and v is not None:
+                self.position_func = v
+
+    def __reduce__(self):
+        return (copyreg.__newobj__, (type(self),), self.__getstate__())
+
+    def copy(self):
+        """A deep copy of the body (without its shapes, constraints or space).
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 2)
+        >>> b.position = 5, 6
+        >>> c = b.copy()
+        >>> c.position, c is b
+        (Vec2d(5.0, 6.0), False)
+        """
+        import copy as _copy
+        return _copy.deepcopy(self)
+
+
+# The C defaults behind Body.update_velocity / Body.update_position, for the
+# func setters' "restore the default" test.
+cdef object _default_update_velocity = Body.update_velocity
+cdef object _default_update_position = Body.update_position
+
+
+# -- test helpers: run the integrators through the C function pointers -----------
+def _run_velocity_func(Body body not None, gravity, double damping, double dt):
+    """Call the body's velocity integrator the way a step does (for tests).
+
+    >>> import tamias2d
+    >>> from tamias2d.body import _run_velocity_func
+    >>> b = tamias2d.Body(1, 1)
+    >>> _run_velocity_func(b, (0, -10), 1.0, 0.1)
+    >>> b.velocity
+    Vec2d(0.0, -1.0)
+    """
+    cdef cpVect g = cpv_from_object(gravity)
+    body._body.velocity_func(&body._body, g, damping, dt)
+
+
+def _run_position_func(Body body not None, double dt):
+    """Call the body's position integrator the way a step does (for tests).
+
+    >>> import tamias2d
+    >>> from tamias2d.body import _run_position_func
+    >>> b = tamias2d.Body(1, 1)
+    >>> b.velocity = 1, 0
+    >>> _run_position_func(b, 0.5)
+    >>> b.position
+    Vec2d(0.5, 0.0)
+    """
+    body._body.position_func(&body._body, dt)
