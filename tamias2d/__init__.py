@@ -10,3 +10,4 @@ chipmunk_version = "2.0.1-tamias2d"
 
 from . import errors
 from .space_debug_draw_options import SpaceDebugDrawOptions
+from .vector import Vec2d, BB, Transform

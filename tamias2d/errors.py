@@ -9,7 +9,8 @@ Checks in tamias2d are real ``raise`` statements: ``python -O`` keeps them.
 
 __all__ = [
     "Tamias2DError", "NotCircleShape", "NotPolyShape", "NotSegmentShape",
-    "IndexOutOfBounds", "IllegalBody", "IllegalShape", "UnsolvableCollision",
+    "IndexOutOfBounds", "IllegalBody", "IllegalShape", "IllegalVector",
+    "UnsolvableCollision",
     "CollisionContactOverflow", "SameVertices", "CollisionError",
     "SpaceLocked", "AlreadyInSpace", "NotInSpace", "CallbackError",
     "HighIterWarning",
@@ -57,6 +58,11 @@ class IllegalBody(Tamias2DError, ValueError, AssertionError):
 class IllegalShape(Tamias2DError, ValueError, AssertionError):
     """A shape definition that cannot be built: negative radius, no vertices,
     non-finite coordinates."""
+
+
+class IllegalVector(Tamias2DError, ValueError, AssertionError):
+    """A vector, bounding box or transform argument with the wrong number of
+    items, or with a NaN or infinite component where a finite one is needed."""
 
 
 class UnsolvableCollision(Tamias2DError, ArithmeticError):
