@@ -11,3 +11,5 @@ chipmunk_version = "2.0.1-tamias2d"
 from . import errors
 from .space_debug_draw_options import SpaceDebugDrawOptions
 from .vector import Vec2d, BB, Transform
+from .arbiter import Arbiter
+from .space import Space, empty_callback

@@ -1,0 +1,86 @@
+# Space module (MIS section 8): the world of Munk2D (cpSpace.c, cpSpaceStep.c,
+# the space half of cpSpaceComponent.c, cpSpaceDebug.c) and the Python Space.
+# Arbiters and their solver are in arbiter.pxd; the struct is cpSpace in
+# _structs.pxd.
+from tamias2d._config cimport cpFloat, cpBool, cpCollisionType, cpCollisionID, cpTimestamp
+from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact,
+    cpCollisionHandler, cpPostStepCallback, cpPostStepFunc, cpConstraint)
+from tamias2d.vector cimport cpVect
+from tamias2d.body cimport Body
+from tamias2d.shape cimport Shape
+
+# -- life cycle (cpSpace.c) ----------------------------------------------------------
+# NULL when out of memory (the space is then destroyed again).
+cdef cpSpace *cpSpaceInit(cpSpace *space) noexcept nogil
+cdef void cpSpaceDestroy(cpSpace *space) noexcept nogil
+
+# -- properties that do more than store a field ---------------------------------------
+cdef void cpSpaceSetGravity(cpSpace *space, cpVect gravity) noexcept nogil
+cdef cpBool cpSpaceIsLocked(cpSpace *space) noexcept nogil
+
+# -- collision handlers ------------------------------------------------------------
+# (wildcard, wildcard) is the global handler; any other ordered pair is found or
+# created (with empty callbacks). NULL when out of memory.
+cdef cpCollisionHandler *cpSpaceAddCollisionHandler(cpSpace *space, cpCollisionType a,
+                                                    cpCollisionType b) noexcept nogil
+cdef cpCollisionHandler *cpSpaceAddWildcardHandler(cpSpace *space, cpCollisionType type) noexcept nogil
+
+# -- objects (callers check the preconditions Munk2D hard-asserts) --------------------
+cdef cpShape *cpSpaceAddShape(cpSpace *space, cpShape *shape) noexcept nogil
+cdef cpBody *cpSpaceAddBody(cpSpace *space, cpBody *body) noexcept nogil
+cdef void cpSpaceRemoveShape(cpSpace *space, cpShape *shape) noexcept nogil
+cdef void cpSpaceRemoveBody(cpSpace *space, cpBody *body) noexcept nogil
+cdef void cpSpaceReindexStatic(cpSpace *space) noexcept nogil
+cdef void cpSpaceReindexShape(cpSpace *space, cpShape *shape) noexcept nogil
+cdef void cpSpaceReindexShapesForBody(cpSpace *space, cpBody *body) noexcept nogil
+
+# -- locking and post-step callbacks (cpSpaceStep.c) ----------------------------------
+cdef void cpSpaceLock(cpSpace *space) noexcept nogil
+cdef void cpSpaceUnlock(cpSpace *space, cpBool runPostStep) noexcept nogil
+cdef cpPostStepCallback *cpSpaceGetPostStepCallback(cpSpace *space, void *key) noexcept nogil
+cdef cpBool cpSpaceAddPostStepCallback(cpSpace *space, cpPostStepFunc func, void *key,
+                                       void *data) noexcept nogil
+
+# -- contact buffers ------------------------------------------------------------------
+cdef void cpSpacePushFreshContactBuffer(cpSpace *space) noexcept nogil
+cdef cpContact *cpContactBufferGetArray(cpSpace *space) noexcept nogil
+cdef void cpSpacePushContacts(cpSpace *space, int count) noexcept nogil
+
+# -- the step ---------------------------------------------------------------------------
+cdef cpCollisionID cpSpaceCollideShapes(void *a, void *b, cpCollisionID id, void *space) noexcept nogil
+cdef cpBool cpSpaceArbiterSetFilter(void *arb, void *space) noexcept nogil
+cdef void cpSpaceFilterArbiters(cpSpace *space, cpBody *body, cpShape *filter) noexcept nogil
+cdef void cpSpaceStep(cpSpace *space, cpFloat dt) noexcept nogil
+
+# -- components and sleeping (cpSpaceComponent.c, space side) --------------------------
+cdef void cpSpaceActivateBody(cpSpace *space, cpBody *body) noexcept nogil
+cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt) noexcept nogil
+
+# -- Python ------------------------------------------------------------------------------
+cdef class Space:
+    cdef cpSpace _space          # the C space, embedded; userData points back here
+    cdef bint _initialized       # cpSpaceInit succeeded (and cpSpaceDestroy is due)
+    cdef dict _bodies            # Body -> None, insertion order (pymunk's Space.bodies)
+    cdef dict _shapes            # Shape -> None
+    cdef dict _constraints       # constraints (none can be added yet)
+    cdef object _static_body     # the lazily created Python static body, or None
+    cdef dict _handlers          # key -> CollisionHandler (keeps the callbacks alive)
+    cdef dict _post_step_callbacks
+    cdef dict _add_later         # objects added while locked, insertion order
+    cdef dict _remove_later      # objects removed while locked (run LIFO, as pymunk)
+    cdef bint _locked            # pymunk's Python-level lock (step or separate callback)
+    cdef object _callback_error  # the first exception raised in a callback, or None
+    cdef public object threaded
+    cdef dict __dict__
+    cdef object __weakref__
+
+    cdef int _raise_callback_error(self) except -1
+    cdef int _check_c_errors(self) except -1
+    cdef int _check_bodies(self) except -1
+    cdef _add_body(self, Body body)
+    cdef _add_shape(self, Shape shape)
+    cdef _remove(self, tuple objs)
+    cdef _remove_shape(self, Shape shape)
+    cdef _remove_body(self, Body body)
+    cdef _after_step(self)
+    cdef _debug_draw(self, options)

@@ -1,0 +1,2024 @@
+"""The space: the world that bodies, shapes and collision callbacks live in.
+
+A :class:`Space` holds bodies and their shapes and moves them forward in
+time with :meth:`Space.step`. The C part is a port of Munk2D's cpSpace.c,
+cpSpaceStep.c, the space half of cpSpaceComponent.c and cpSpaceDebug.c; it
+keeps Munk2D's order of everything (broad phase callbacks, arbiter array,
+solver passes), so a scene gives the same numbers as in pymunk. The Python
+part follows pymunk 7.3's ``Space``.
+
+A step with no Python callback installed (no collision handler, no Python
+integrator, no post-step callback) runs entirely without the GIL.
+"""
+cimport cython
+from libc.math cimport INFINITY, pow, atan2, isfinite
+from libc.string cimport memcpy
+from libc.stdint cimport uintptr_t
+from cpython.ref cimport PyObject
+
+import math
+import platform
+import weakref
+
+from tamias2d._config cimport (cpFloat, cpBool, cpHashValue, cpCollisionType,
+    cpCollisionID, cpTimestamp, TAMIAS_FLOAT_0_1F, TAMIAS_FLOAT_0_9F,
+    CP_HASH_PAIR, CP_HASH_PAIR_ORDERED, CP_WILDCARD_COLLISION_TYPE,
+    CP_MAX_CONTACTS_PER_ARBITER, CP_BUFFER_BYTES)
+from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact,
+    cpArray, cpCollisionInfo, cpCollisionHandler, cpContactBufferHeader,
+    cpPostStepCallback, cpPostStepFunc, cpConstraint, cpBodyType,
+    cpCircleShape, cpSegmentShape, cpPolyShape, cpSplittingPlane,
+    cpSpatialIndex, cpSpatialIndexIteratorFunc, cpSpatialIndexQueryFunc,
+    cpHashSetFilterFunc, cpHashSetIteratorFunc, cpHashSetEqlFunc, cpHashSetTransFunc,
+    CP_BODY_TYPE_DYNAMIC, CP_BODY_TYPE_KINEMATIC, CP_BODY_TYPE_STATIC,
+    CP_CIRCLE_SHAPE, CP_SEGMENT_SHAPE, CP_POLY_SHAPE,
+    CP_ARBITER_STATE_FIRST_COLLISION, CP_ARBITER_STATE_NORMAL,
+    CP_ARBITER_STATE_IGNORE, CP_ARBITER_STATE_CACHED, CP_ARBITER_STATE_INVALIDATED)
+from tamias2d._containers cimport (cpcalloc, cpfree, cpArrayNew, cpArrayFree, cpArrayPush,
+    cpArrayPop, cpArrayDeleteObj, cpArrayFreeEach, cpArrayContains, cpHashSetNew,
+    cpHashSetFree, cpHashSetInsert, cpHashSetRemove, cpHashSetFind, cpHashSetEach,
+    cpHashSetFilter, cpTakeOutOfMemory)
+from tamias2d._bbtree cimport (cpBBTreeNew, cpBBTreeSetVelocityFunc, cpBBTreeVelocityFunc,
+    cpSpatialIndexFree, cpSpatialIndexEach, cpSpatialIndexInsert, cpSpatialIndexRemove,
+    cpSpatialIndexReindex, cpSpatialIndexReindexObject, cpSpatialIndexReindexQuery)
+from tamias2d.vector cimport (cpVect, cpBB, cpTransform, cpv, cpvadd, cpvsub, cpvmult,
+    cpvlengthsq, cpvdist, cpBBIntersects, cpTransformPoint, vec2d_from_cpv,
+    cpv_from_object, cpv_from_object_finite, cptransform_from_object)
+from tamias2d.body cimport (Body, cpBodyInit, cpBodySetType, cpBodyActivate,
+    cpBodyActivateStatic, cpBodyAddShape, cpBodyRemoveShape, cpBodyGetType,
+    cpBodyIsSleeping, cpBodyKineticEnergy, tamias_BodySpaceHooks, tamias_set_body_space_hooks)
+from tamias2d.shape cimport Shape, cpShapeUpdate, cpShapeCacheBB, cpShapeFilterReject
+from tamias2d.collision cimport cpCollide, collision_check_flags
+from tamias2d.arbiter cimport (Arbiter, arbiter_wrap, cpArbiterInit, cpArbiterUpdate,
+    cpArbiterPreStep, cpArbiterApplyCachedImpulse, cpArbiterApplyImpulse,
+    cpArbiterUnthread, cpCollisionHandlerDoNothing, cpCollisionDoNothing,
+    cpArbiterThreadForBody, cpArbiterNext)
+
+from tamias2d.errors import (IllegalBody, IllegalShape, SpaceLocked, AlreadyInSpace,
+    NotInSpace)
+
+
+# Contacts per 32 KiB contact buffer, as Munk2D computes CP_CONTACTS_BUFFER_SIZE.
+cdef enum:
+    CP_CONTACTS_BUFFER_SIZE = (CP_BUFFER_BYTES - 24) // 96
+
+cdef struct cpContactBuffer:
+    cpContactBufferHeader header
+    cpContact contacts[CP_CONTACTS_BUFFER_SIZE]
+
+if sizeof(cpContactBufferHeader) != 24 or sizeof(cpContact) != 96:  # pragma: no cover
+    raise ImportError("tamias2d.space: unexpected contact struct sizes")
+
+
+# -- small helpers of cpSpace.c --------------------------------------------------------
+
+cdef cpBool arbiterSetEql(const void *ptr, const void *elt) noexcept nogil:
+    cdef cpShape **shapes = <cpShape **>ptr
+    cdef cpArbiter *arb = <cpArbiter *>elt
+    cdef cpShape *a = shapes[0]
+    cdef cpShape *b = shapes[1]
+    return (a == arb.a and b == arb.b) or (b == arb.a and a == arb.b)
+
+cdef cpBool handlerSetEql(const void *ptr, const void *elt) noexcept nogil:
+    # ptr is a handler or a (typeA, typeB) pair laid out like its first fields.
+    cdef cpCollisionHandler *check = <cpCollisionHandler *>ptr
+    cdef cpCollisionHandler *pair = <cpCollisionHandler *>elt
+    return check.typeA == pair.typeA and check.typeB == pair.typeB
+
+cdef void *handlerSetTrans(const void *ptr, void *unused) noexcept nogil:
+    cdef cpCollisionHandler *copy = <cpCollisionHandler *>cpcalloc(1, sizeof(cpCollisionHandler))
+    if copy != NULL:
+        memcpy(copy, ptr, sizeof(cpCollisionHandler))
+    return copy
+
+cdef cpBB _shapeGetBB(void *obj) noexcept nogil:
+    return (<cpShape *>obj).bb
+
+# The dynamic tree predicts a shape's motion from its body's velocity.
+cdef cpVect ShapeVelocityFunc(void *obj) noexcept nogil:
+    return (<cpShape *>obj).body.v
+
+cdef void FreeWrap(void *ptr, void *unused) noexcept nogil:
+    cpfree(ptr)
+
+cdef void _freeWrap1(void *ptr) noexcept nogil:
+    cpfree(ptr)
+
+cdef inline cpConstraint *cpConstraintNext(cpConstraint *node, cpBody *body) noexcept nogil:
+    return node.next_a if node.a == body else node.next_b
+
+cdef inline cpArray *cpSpaceArrayForBodyType(cpSpace *space, cpBodyType type) noexcept nogil:
+    return space.staticBodies if type == CP_BODY_TYPE_STATIC else space.dynamicBodies
+
+cdef inline void cpSpaceUncacheArbiter(cpSpace *space, cpArbiter *arb) noexcept nogil:
+    cdef const cpShape *shape_pair[2]
+    shape_pair[0] = arb.a
+    shape_pair[1] = arb.b
+    cdef cpHashValue arbHashID = CP_HASH_PAIR(<cpHashValue>arb.a, <cpHashValue>arb.b)
+    cpHashSetRemove(space.cachedArbiters, arbHashID, shape_pair)
+    cpArrayDeleteObj(space.arbiters, arb)
+
+
+# -- life cycle -------------------------------------------------------------------------
+
+cdef cpSpace *cpSpaceInit(cpSpace *space) noexcept nogil:
+    space.iterations = 10
+    space.gravity = cpv(0.0, 0.0)
+    space.damping = 1.0
+    # Munk2D writes these as float literals: 0.1f and pow(1.0f - 0.1f, 60.0f).
+    space.collisionSlop = TAMIAS_FLOAT_0_1F
+    space.collisionBias = pow(TAMIAS_FLOAT_0_9F, 60.0)
+    space.collisionPersistence = 3
+    space.locked = 0
+    space.stamp = 0
+    space.curr_dt = 0.0
+    space.userData = NULL
+
+    space.shapeIDCounter = 0
+    space.staticShapes = cpBBTreeNew(_shapeGetBB, NULL)
+    space.dynamicShapes = cpBBTreeNew(_shapeGetBB, space.staticShapes)
+    if space.dynamicShapes != NULL:
+        cpBBTreeSetVelocityFunc(space.dynamicShapes, ShapeVelocityFunc)
+
+    space.allocatedBuffers = cpArrayNew(0)
+    space.dynamicBodies = cpArrayNew(0)
+    space.staticBodies = cpArrayNew(0)
+    space.sleepingComponents = cpArrayNew(0)
+    space.rousedBodies = cpArrayNew(0)
+
+    space.sleepTimeThreshold = INFINITY
+    space.idleSpeedThreshold = 0.0
+
+    space.arbiters = cpArrayNew(0)
+    space.pooledArbiters = cpArrayNew(0)
+
+    space.contactBuffersHead = NULL
+    space.cachedArbiters = cpHashSetNew(0, arbiterSetEql)
+
+    space.constraints = cpArrayNew(0)
+
+    memcpy(&space.globalHandler, cpCollisionHandlerDoNothing(), sizeof(cpCollisionHandler))
+    space.collisionHandlers = cpHashSetNew(0, handlerSetEql)
+
+    space.postStepCallbacks = cpArrayNew(0)
+    space.skipPostStep = 0
+
+    space.staticBody = NULL
+    cdef cpBody *staticBody = cpBodyInit(&space._staticBody, 0.0, 0.0)
+    cpBodySetType(staticBody, CP_BODY_TYPE_STATIC)
+    cpSpaceSetStaticBody(space, staticBody)
+
+    if (space.staticShapes == NULL or space.dynamicShapes == NULL
+            or space.allocatedBuffers == NULL or space.dynamicBodies == NULL
+            or space.staticBodies == NULL or space.sleepingComponents == NULL
+            or space.rousedBodies == NULL or space.arbiters == NULL
+            or space.pooledArbiters == NULL or space.cachedArbiters == NULL
+            or space.constraints == NULL or space.collisionHandlers == NULL
+            or space.postStepCallbacks == NULL):
+        cpSpaceDestroy(space)
+        return NULL
+    return space
+
+cdef void cpSpaceSetStaticBody(cpSpace *space, cpBody *body) noexcept nogil:
+    if space.staticBody != NULL:
+        space.staticBody.space = NULL
+    space.staticBody = body
+    body.space = space
+
+cdef void _activateWrap(cpBody *body) noexcept nogil:
+    cpBodyActivate(body)
+
+cdef void cpSpaceDestroy(cpSpace *space) noexcept nogil:
+    # Munk2D wakes every body first so that sleeping arbiters give their heap
+    # contacts back; here the Python layer has already removed every object.
+    if space.staticShapes != NULL:
+        cpSpatialIndexFree(space.staticShapes)
+    if space.dynamicShapes != NULL:
+        cpSpatialIndexFree(space.dynamicShapes)
+    space.staticShapes = NULL
+    space.dynamicShapes = NULL
+
+    if space.sleepingComponents != NULL:
+        cpArrayFree(space.sleepingComponents)
+    if space.dynamicBodies != NULL:
+        cpArrayFree(space.dynamicBodies)
+    if space.staticBodies != NULL:
+        cpArrayFree(space.staticBodies)
+    if space.rousedBodies != NULL:
+        cpArrayFree(space.rousedBodies)
+    if space.constraints != NULL:
+        cpArrayFree(space.constraints)
+    if space.cachedArbiters != NULL:
+        cpHashSetFree(space.cachedArbiters)
+    if space.arbiters != NULL:
+        cpArrayFree(space.arbiters)
+    if space.pooledArbiters != NULL:
+        cpArrayFree(space.pooledArbiters)
+    if space.allocatedBuffers != NULL:
+        cpArrayFreeEach(space.allocatedBuffers, _freeWrap1)
+        cpArrayFree(space.allocatedBuffers)
+    if space.postStepCallbacks != NULL:
+        cpArrayFreeEach(space.postStepCallbacks, _freeWrap1)
+        cpArrayFree(space.postStepCallbacks)
+    if space.collisionHandlers != NULL:
+        cpHashSetEach(space.collisionHandlers, FreeWrap, NULL)
+        cpHashSetFree(space.collisionHandlers)
+    space.sleepingComponents = NULL
+    space.dynamicBodies = NULL
+    space.staticBodies = NULL
+    space.rousedBodies = NULL
+    space.constraints = NULL
+    space.cachedArbiters = NULL
+    space.arbiters = NULL
+    space.pooledArbiters = NULL
+    space.allocatedBuffers = NULL
+    space.postStepCallbacks = NULL
+    space.collisionHandlers = NULL
+    space.contactBuffersHead = NULL
+
+
+# -- properties -------------------------------------------------------------------------
+
+cdef void cpSpaceSetGravity(cpSpace *space, cpVect gravity) noexcept nogil:
+    space.gravity = gravity
+    # Wake every sleeping component: gravity changed under them. (Munk2D's
+    # loop advances while waking removes entries; kept as is.)
+    cdef cpArray *components = space.sleepingComponents
+    cdef int i = 0
+    while i < components.num:
+        cpBodyActivate(<cpBody *>components.arr[i])
+        i += 1
+
+cdef cpBool cpSpaceIsLocked(cpSpace *space) noexcept nogil:
+    return space.locked > 0
+
+
+# -- collision handlers -------------------------------------------------------------------
+
+cdef cpCollisionHandler *cpSpaceAddCollisionHandler(cpSpace *space, cpCollisionType a,
+                                                    cpCollisionType b) noexcept nogil:
+    if a == b and a == CP_WILDCARD_COLLISION_TYPE:
+        return &space.globalHandler
+    cdef cpHashValue hash = CP_HASH_PAIR_ORDERED(a, b)
+    cdef cpCollisionHandler handler
+    handler.typeA = a
+    handler.typeB = b
+    handler.beginFunc = cpCollisionDoNothing
+    handler.preSolveFunc = cpCollisionDoNothing
+    handler.postSolveFunc = cpCollisionDoNothing
+    handler.separateFunc = cpCollisionDoNothing
+    handler.userData = NULL
+    return <cpCollisionHandler *>cpHashSetInsert(space.collisionHandlers, hash, &handler,
+                                                 handlerSetTrans, NULL)
+
+cdef cpCollisionHandler *cpSpaceAddWildcardHandler(cpSpace *space, cpCollisionType type) noexcept nogil:
+    cdef cpHashValue hash = CP_HASH_PAIR_ORDERED(type, CP_WILDCARD_COLLISION_TYPE)
+    cdef cpCollisionHandler handler
+    handler.typeA = type
+    handler.typeB = CP_WILDCARD_COLLISION_TYPE
+    handler.beginFunc = cpCollisionDoNothing
+    handler.preSolveFunc = cpCollisionDoNothing
+    handler.postSolveFunc = cpCollisionDoNothing
+    handler.separateFunc = cpCollisionDoNothing
+    handler.userData = NULL
+    return <cpCollisionHandler *>cpHashSetInsert(space.collisionHandlers, hash, &handler,
+                                                 handlerSetTrans, NULL)
+
+
+# -- bodies and shapes --------------------------------------------------------------------
+
+cdef cpShape *cpSpaceAddShape(cpSpace *space, cpShape *shape) noexcept nogil:
+    cdef cpBody *body = shape.body
+    cdef cpBool isStatic = cpBodyGetType(body) == CP_BODY_TYPE_STATIC
+    if not isStatic:
+        cpBodyActivate(body)
+    cpBodyAddShape(body, shape)
+    # Ids come from a counter and are never reused: they order the broad phase.
+    shape.hashid = space.shapeIDCounter
+    space.shapeIDCounter += 1
+    cpShapeUpdate(shape, body.transform)
+    cpSpatialIndexInsert(space.staticShapes if isStatic else space.dynamicShapes, shape, shape.hashid)
+    shape.space = space
+    return shape
+
+cdef cpBody *cpSpaceAddBody(cpSpace *space, cpBody *body) noexcept nogil:
+    if not cpArrayPush(cpSpaceArrayForBodyType(space, cpBodyGetType(body)), body):
+        return NULL
+    body.space = space
+    return body
+
+cdef struct arbiterFilterContext:
+    cpSpace *space
+    cpBody *body
+    cpShape *shape
+
+cdef inline void _callSeparateNoToggle(cpArbiter *arb, cpSpace *space) noexcept nogil:
+    # Shape removal calls separate on all five handlers without toggling
+    # `swapped` (unlike the step).
+    arb.handlerAB.separateFunc(arb, space, arb.handlerAB.userData)
+    arb.handlerBA.separateFunc(arb, space, arb.handlerBA.userData)
+    arb.handlerA.separateFunc(arb, space, arb.handlerA.userData)
+    arb.handlerB.separateFunc(arb, space, arb.handlerB.userData)
+    space.globalHandler.separateFunc(arb, space, space.globalHandler.userData)
+
+cdef cpBool cachedArbitersFilter(void *elt, void *data) noexcept nogil:
+    cdef cpArbiter *arb = <cpArbiter *>elt
+    cdef arbiterFilterContext *context = <arbiterFilterContext *>data
+    cdef cpShape *shape = context.shape
+    cdef cpBody *body = context.body
+    if ((body == arb.body_a and (shape == arb.a or shape == NULL))
+            or (body == arb.body_b and (shape == arb.b or shape == NULL))):
+        if shape != NULL and arb.state != CP_ARBITER_STATE_CACHED:
+            # One of the shapes is going away: the arbiter is invalidated.
+            arb.state = CP_ARBITER_STATE_INVALIDATED
+            _callSeparateNoToggle(arb, context.space)
+        cpArbiterUnthread(arb)
+        cpArrayDeleteObj(context.space.arbiters, arb)
+        cpArrayPush(context.space.pooledArbiters, arb)
+        # A pooled arbiter forgets its shapes so that a stale Python Arbiter
+        # view can tell (the removed shape may be freed).
+        arb.a = NULL
+        arb.b = NULL
+        return 0
+    return 1
+
+cdef void cpSpaceFilterArbiters(cpSpace *space, cpBody *body, cpShape *filter) noexcept nogil:
+    cpSpaceLock(space)
+    cdef arbiterFilterContext context
+    context.space = space
+    context.body = body
+    context.shape = filter
+    cpHashSetFilter(space.cachedArbiters, cachedArbitersFilter, &context)
+    cpSpaceUnlock(space, 1)
+
+cdef void cpSpaceRemoveShape(cpSpace *space, cpShape *shape) noexcept nogil:
+    cdef cpBody *body = shape.body
+    cdef cpBool isStatic = cpBodyGetType(body) == CP_BODY_TYPE_STATIC
+    if isStatic:
+        cpBodyActivateStatic(body, shape)
+    else:
+        cpBodyActivate(body)
+    cpBodyRemoveShape(body, shape)
+    cpSpaceFilterArbiters(space, body, shape)
+    cpSpatialIndexRemove(space.staticShapes if isStatic else space.dynamicShapes, shape, shape.hashid)
+    shape.space = NULL
+    shape.hashid = 0
+
+cdef void cpSpaceRemoveBody(cpSpace *space, cpBody *body) noexcept nogil:
+    cpBodyActivate(body)
+    # Munk2D does not filter the body's arbiters here (only shape removal does).
+    cpArrayDeleteObj(cpSpaceArrayForBodyType(space, cpBodyGetType(body)), body)
+    body.space = NULL
+
+
+# -- iteration ----------------------------------------------------------------------------
+
+ctypedef void (*cpSpaceBodyIteratorFunc)(cpBody *body, void *data) noexcept nogil
+
+cdef void cpSpaceEachBody(cpSpace *space, cpSpaceBodyIteratorFunc func, void *data) noexcept nogil:
+    cdef int i
+    cdef cpArray *bodies
+    cdef cpBody *body
+    cdef cpBody *next
+    cpSpaceLock(space)
+    bodies = space.dynamicBodies
+    i = 0
+    while i < bodies.num:
+        func(<cpBody *>bodies.arr[i], data)
+        i += 1
+    bodies = space.staticBodies
+    i = 0
+    while i < bodies.num:
+        func(<cpBody *>bodies.arr[i], data)
+        i += 1
+    bodies = space.sleepingComponents
+    i = 0
+    while i < bodies.num:
+        body = <cpBody *>bodies.arr[i]
+        while body != NULL:
+            next = body.sleeping.next
+            func(body, data)
+            body = next
+        i += 1
+    cpSpaceUnlock(space, 1)
+
+cdef void cpSpaceEachShape(cpSpace *space, cpSpatialIndexIteratorFunc func, void *data) noexcept nogil:
+    # Dynamic tree first, then the static one, each in leaf-set order.
+    cpSpaceLock(space)
+    cpSpatialIndexEach(space.dynamicShapes, func, data)
+    cpSpatialIndexEach(space.staticShapes, func, data)
+    cpSpaceUnlock(space, 1)
+
+
+# -- reindexing ---------------------------------------------------------------------------
+
+cdef void cpShapeUpdateFunc(void *shape, void *unused) noexcept nogil:
+    cpShapeCacheBB(<cpShape *>shape)
+
+cdef void cpSpaceReindexStatic(cpSpace *space) noexcept nogil:
+    cpSpatialIndexEach(space.staticShapes, cpShapeUpdateFunc, NULL)
+    cpSpatialIndexReindex(space.staticShapes)
+
+cdef void cpSpaceReindexShape(cpSpace *space, cpShape *shape) noexcept nogil:
+    cpShapeCacheBB(shape)
+    # The shape is in one of the two trees; reindexing in the other is a no-op.
+    cpSpatialIndexReindexObject(space.dynamicShapes, shape, shape.hashid)
+    cpSpatialIndexReindexObject(space.staticShapes, shape, shape.hashid)
+
+cdef void cpSpaceReindexShapesForBody(cpSpace *space, cpBody *body) noexcept nogil:
+    cdef cpShape *shape = body.shapeList
+    while shape != NULL:
+        cpSpaceReindexShape(space, shape)
+        shape = shape.next
+
+
+# -- post-step callbacks and locking (cpSpaceStep.c) ------------------------------------------
+
+cdef cpPostStepCallback *cpSpaceGetPostStepCallback(cpSpace *space, void *key) noexcept nogil:
+    cdef cpArray *arr = space.postStepCallbacks
+    cdef int i
+    cdef cpPostStepCallback *callback
+    for i in range(arr.num):
+        callback = <cpPostStepCallback *>arr.arr[i]
+        if callback != NULL and callback.key == key:
+            return callback
+    return NULL
+
+cdef void PostStepDoNothing(cpSpace *space, void *obj, void *data) noexcept nogil:
+    pass
+
+cdef cpBool cpSpaceAddPostStepCallback(cpSpace *space, cpPostStepFunc func, void *key,
+                                       void *data) noexcept nogil:
+    cdef cpPostStepCallback *callback
+    if cpSpaceGetPostStepCallback(space, key) == NULL:
+        callback = <cpPostStepCallback *>cpcalloc(1, sizeof(cpPostStepCallback))
+        if callback == NULL:
+            return 0
+        callback.func = func if func != NULL else PostStepDoNothing
+        callback.key = key
+        callback.data = data
+        if not cpArrayPush(space.postStepCallbacks, callback):
+            cpfree(callback)
+            return 0
+        return 1
+    return 0
+
+cdef void cpSpaceLock(cpSpace *space) noexcept nogil:
+    space.locked += 1
+
+cdef void cpSpaceUnlock(cpSpace *space, cpBool runPostStep) noexcept nogil:
+    cdef cpArray *waking
+    cdef cpArray *arr
+    cdef int i, count
+    cdef cpPostStepCallback *callback
+    cdef cpPostStepFunc func
+    space.locked -= 1
+    if space.locked == 0:
+        waking = space.rousedBodies
+        count = waking.num
+        for i in range(count):
+            cpSpaceActivateBody(space, <cpBody *>waking.arr[i])
+            waking.arr[i] = NULL
+        waking.num = 0
+
+        if space.locked == 0 and runPostStep and not space.skipPostStep:
+            space.skipPostStep = 1
+            arr = space.postStepCallbacks
+            i = 0
+            while i < arr.num:
+                callback = <cpPostStepCallback *>arr.arr[i]
+                func = callback.func
+                # Cleared first in case the callback runs the callbacks again.
+                callback.func = NULL
+                if func != NULL:
+                    func(space, callback.key, callback.data)
+                arr.arr[i] = NULL
+                cpfree(callback)
+                i += 1
+            arr.num = 0
+            space.skipPostStep = 0
+
+
+# -- contact buffers -------------------------------------------------------------------------
+
+cdef cpContactBufferHeader *cpSpaceAllocContactBuffer(cpSpace *space) noexcept nogil:
+    cdef cpContactBuffer *buffer = <cpContactBuffer *>cpcalloc(1, sizeof(cpContactBuffer))
+    if buffer == NULL:
+        return NULL
+    if not cpArrayPush(space.allocatedBuffers, buffer):
+        cpfree(buffer)
+        return NULL
+    return <cpContactBufferHeader *>buffer
+
+cdef cpContactBufferHeader *cpContactBufferHeaderInit(cpContactBufferHeader *header,
+        cpTimestamp stamp, cpContactBufferHeader *splice) noexcept nogil:
+    header.stamp = stamp
+    header.next = splice.next if splice != NULL else header
+    header.numContacts = 0
+    return header
+
+cdef void cpSpacePushFreshContactBuffer(cpSpace *space) noexcept nogil:
+    cdef cpTimestamp stamp = space.stamp
+    cdef cpContactBufferHeader *head = space.contactBuffersHead
+    cdef cpContactBufferHeader *tail
+    cdef cpContactBufferHeader *buffer
+    if head == NULL:
+        buffer = cpSpaceAllocContactBuffer(space)
+        if buffer != NULL:
+            space.contactBuffersHead = cpContactBufferHeaderInit(buffer, stamp, NULL)
+    elif <cpTimestamp>(stamp - head.next.stamp) > space.collisionPersistence:
+        # The oldest buffer of the ring has expired: reuse it.
+        tail = head.next
+        space.contactBuffersHead = cpContactBufferHeaderInit(tail, stamp, tail)
+    else:
+        buffer = cpSpaceAllocContactBuffer(space)
+        if buffer != NULL:
+            buffer = cpContactBufferHeaderInit(buffer, stamp, head)
+            head.next = buffer
+            space.contactBuffersHead = buffer
+        # Out of memory: keep filling the current head (the caller checks room).
+
+cdef cpContact *cpContactBufferGetArray(cpSpace *space) noexcept nogil:
+    cdef cpContactBufferHeader *head
+    if (space.contactBuffersHead == NULL or space.contactBuffersHead.numContacts
+            + CP_MAX_CONTACTS_PER_ARBITER > CP_CONTACTS_BUFFER_SIZE):
+        # The next collision could overflow this buffer: start a fresh one.
+        cpSpacePushFreshContactBuffer(space)
+    head = space.contactBuffersHead
+    if head == NULL or head.numContacts + CP_MAX_CONTACTS_PER_ARBITER > CP_CONTACTS_BUFFER_SIZE:
+        return NULL  # out of memory
+    return (<cpContactBuffer *>head).contacts + head.numContacts
+
+cdef void cpSpacePushContacts(cpSpace *space, int count) noexcept nogil:
+    space.contactBuffersHead.numContacts += count
+
+cdef inline void cpSpacePopContacts(cpSpace *space, int count) noexcept nogil:
+    space.contactBuffersHead.numContacts -= count
+
+
+# -- collision detection ------------------------------------------------------------------------
+
+cdef void *cpSpaceArbiterSetTrans(const void *ptr, void *data) noexcept nogil:
+    cdef cpShape **shapes = <cpShape **>ptr
+    cdef cpSpace *space = <cpSpace *>data
+    cdef int count, i
+    cdef cpArbiter *buffer
+    if space.pooledArbiters.num == 0:
+        # The pool is empty: carve a fresh 32 KiB block into arbiters.
+        count = CP_BUFFER_BYTES // sizeof(cpArbiter)
+        buffer = <cpArbiter *>cpcalloc(1, CP_BUFFER_BYTES)
+        if buffer == NULL:
+            return NULL
+        if not cpArrayPush(space.allocatedBuffers, buffer):
+            cpfree(buffer)
+            return NULL
+        for i in range(count):
+            cpArrayPush(space.pooledArbiters, buffer + i)
+        if space.pooledArbiters.num == 0:
+            return NULL
+    return cpArbiterInit(<cpArbiter *>cpArrayPop(space.pooledArbiters), shapes[0], shapes[1])
+
+cdef inline cpBool QueryRejectConstraint(cpBody *a, cpBody *b) noexcept nogil:
+    cdef cpConstraint *constraint = a.constraintList
+    while constraint != NULL:
+        if (not constraint.collideBodies and (
+                (constraint.a == a and constraint.b == b)
+                or (constraint.a == b and constraint.b == a))):
+            return 1
+        constraint = cpConstraintNext(constraint, a)
+    return 0
+
+cdef inline cpBool QueryReject(cpShape *a, cpShape *b) noexcept nogil:
+    return (not cpBBIntersects(a.bb, b.bb)
+            or a.body == b.body
+            or cpShapeFilterReject(a.filter, b.filter)
+            or QueryRejectConstraint(a.body, b.body))
+
+# Five handlers in Munk2D's order, toggling `swapped` around BA and B so each
+# handler sees the shapes in its own type order.
+cdef inline void _callBegin(cpArbiter *arb, cpSpace *space) noexcept nogil:
+    cdef cpCollisionHandler *h
+    h = arb.handlerAB
+    h.beginFunc(arb, space, h.userData)
+    h = arb.handlerBA
+    arb.swapped = not arb.swapped
+    h.beginFunc(arb, space, h.userData)
+    arb.swapped = not arb.swapped
+    h = arb.handlerA
+    h.beginFunc(arb, space, h.userData)
+    h = arb.handlerB
+    arb.swapped = not arb.swapped
+    h.beginFunc(arb, space, h.userData)
+    arb.swapped = not arb.swapped
+    h = &space.globalHandler
+    h.beginFunc(arb, space, h.userData)
+
+cdef inline void _callPreSolve(cpArbiter *arb, cpSpace *space) noexcept nogil:
+    cdef cpCollisionHandler *h
+    h = arb.handlerAB
+    h.preSolveFunc(arb, space, h.userData)
+    h = arb.handlerBA
+    arb.swapped = not arb.swapped
+    h.preSolveFunc(arb, space, h.userData)
+    arb.swapped = not arb.swapped
+    h = arb.handlerA
+    h.preSolveFunc(arb, space, h.userData)
+    h = arb.handlerB
+    arb.swapped = not arb.swapped
+    h.preSolveFunc(arb, space, h.userData)
+    arb.swapped = not arb.swapped
+    h = &space.globalHandler
+    h.preSolveFunc(arb, space, h.userData)
+
+cdef inline void _callPostSolve(cpArbiter *arb, cpSpace *space) noexcept nogil:
+    cdef cpCollisionHandler *h
+    h = arb.handlerAB
+    h.postSolveFunc(arb, space, h.userData)
+    h = arb.handlerBA
+    arb.swapped = not arb.swapped
+    h.postSolveFunc(arb, space, h.userData)
+    arb.swapped = not arb.swapped
+    h = arb.handlerA
+    h.postSolveFunc(arb, space, h.userData)
+    h = arb.handlerB
+    arb.swapped = not arb.swapped
+    h.postSolveFunc(arb, space, h.userData)
+    arb.swapped = not arb.swapped
+    h = &space.globalHandler
+    h.postSolveFunc(arb, space, h.userData)
+
+cdef inline void _callSeparate(cpArbiter *arb, cpSpace *space) noexcept nogil:
+    cdef cpCollisionHandler *h
+    h = arb.handlerAB
+    h.separateFunc(arb, space, h.userData)
+    h = arb.handlerBA
+    arb.swapped = not arb.swapped
+    h.separateFunc(arb, space, h.userData)
+    arb.swapped = not arb.swapped
+    h = arb.handlerA
+    h.separateFunc(arb, space, h.userData)
+    h = arb.handlerB
+    arb.swapped = not arb.swapped
+    h.separateFunc(arb, space, h.userData)
+    arb.swapped = not arb.swapped
+    h = &space.globalHandler
+    h.separateFunc(arb, space, h.userData)
+
+# The broad phase callback: narrow phase, arbiter lookup, handlers.
+cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID id,
+                                        void *data) noexcept nogil:
+    cdef cpShape *a = <cpShape *>obj_a
+    cdef cpShape *b = <cpShape *>obj_b
+    cdef cpSpace *space = <cpSpace *>data
+    cdef cpContact *contacts
+    cdef cpCollisionInfo info
+    cdef const cpShape *shape_pair[2]
+    cdef cpHashValue arbHashID
+    cdef cpArbiter *arb
+
+    if QueryReject(a, b):
+        return id
+
+    contacts = cpContactBufferGetArray(space)
+    if contacts == NULL:
+        return id  # out of memory: the flag is up, the pair is skipped
+    info = cpCollide(a, b, id, contacts)
+    if info.count == 0:
+        return info.id
+    cpSpacePushContacts(space, info.count)
+
+    # The persistent arbiter of the pair, keyed by the two shape pointers.
+    shape_pair[0] = info.a
+    shape_pair[1] = info.b
+    arbHashID = CP_HASH_PAIR(<cpHashValue>info.a, <cpHashValue>info.b)
+    arb = <cpArbiter *>cpHashSetInsert(space.cachedArbiters, arbHashID, shape_pair,
+                                       cpSpaceArbiterSetTrans, space)
+    if arb == NULL:
+        cpSpacePopContacts(space, info.count)
+        return info.id
+    cpArbiterUpdate(arb, &info, space)
+
+    if arb.state == CP_ARBITER_STATE_FIRST_COLLISION:
+        _callBegin(arb, space)
+    _callPreSolve(arb, space)
+
+    if (arb.state != CP_ARBITER_STATE_IGNORE
+            and arb.processCollision
+            and not (a.sensor or b.sensor)
+            and not (a.body.m == INFINITY and b.body.m == INFINITY)):
+        if not cpArrayPush(space.arbiters, arb):
+            pass  # out of memory: the flag is up, the pair goes unsolved
+    else:
+        cpSpacePopContacts(space, info.count)
+        arb.contacts = NULL
+        arb.count = 0
+        # Rejected, sensor and infinite-mass arbiters skip post-solve; mark
+        # them used here instead.
+        if arb.state != CP_ARBITER_STATE_IGNORE:
+            arb.state = CP_ARBITER_STATE_NORMAL
+
+    arb.stamp = space.stamp
+    return info.id
+
+# Per-step filter of the arbiter cache: separate callbacks and expiry.
+cdef cpBool cpSpaceArbiterSetFilter(void *elt, void *data) noexcept nogil:
+    cdef cpArbiter *arb = <cpArbiter *>elt
+    cdef cpSpace *space = <cpSpace *>data
+    cdef cpTimestamp ticks = space.stamp - arb.stamp
+    cdef cpBody *a = arb.body_a
+    cdef cpBody *b = arb.body_b
+
+    # Keep arbiters between static or sleeping bodies untouched.
+    if ((cpBodyGetType(a) == CP_BODY_TYPE_STATIC or cpBodyIsSleeping(a))
+            and (cpBodyGetType(b) == CP_BODY_TYPE_STATIC or cpBodyIsSleeping(b))):
+        return 1
+
+    # Touched last step but not this one: the shapes separated.
+    if ticks >= 1 and arb.state != CP_ARBITER_STATE_CACHED:
+        arb.state = CP_ARBITER_STATE_CACHED
+        _callSeparate(arb, space)
+
+    if ticks >= space.collisionPersistence:
+        arb.contacts = NULL
+        arb.count = 0
+        cpArrayPush(space.pooledArbiters, arb)
+        if ticks >= 1:
+            # Not in this step's arbiter array: forget the shapes (see
+            # cachedArbitersFilter).
+            arb.a = NULL
+            arb.b = NULL
+        return 0
+    return 1
+
+
+# -- the step ------------------------------------------------------------------------------------
+
+cdef void cpSpaceStep(cpSpace *space, cpFloat dt) noexcept nogil:
+    if dt == 0.0:
+        return
+    space.stamp += 1
+    cdef cpFloat prev_dt = space.curr_dt
+    space.curr_dt = dt
+
+    cdef cpArray *bodies = space.dynamicBodies
+    cdef cpArray *constraints = space.constraints
+    cdef cpArray *arbiters = space.arbiters
+    cdef int i, j
+    cdef cpArbiter *arb
+    cdef cpBody *body
+    cdef cpConstraint *constraint
+    cdef cpFloat slop, biasCoef, damping, dt_coef
+    cdef cpVect gravity
+
+    # Reset last step's arbiters and unthread those between awake bodies.
+    for i in range(arbiters.num):
+        arb = <cpArbiter *>arbiters.arr[i]
+        arb.state = CP_ARBITER_STATE_NORMAL
+        if not cpBodyIsSleeping(arb.body_a) and not cpBodyIsSleeping(arb.body_b):
+            cpArbiterUnthread(arb)
+    arbiters.num = 0
+
+    cpSpaceLock(space)
+    # Integrate positions.
+    for i in range(bodies.num):
+        body = <cpBody *>bodies.arr[i]
+        body.position_func(body, dt)
+    # Find colliding pairs: broad and narrow phase in one pass.
+    cpSpacePushFreshContactBuffer(space)
+    cpSpatialIndexEach(space.dynamicShapes, cpShapeUpdateFunc, NULL)
+    cpSpatialIndexReindexQuery(space.dynamicShapes, cpSpaceCollideShapes, space)
+    cpSpaceUnlock(space, 0)
+
+    # Rebuild the contact graph (and put idle components to sleep).
+    cpSpaceProcessComponents(space, dt)
+
+    cpSpaceLock(space)
+    # Drop old cached arbiters and call separate callbacks.
+    cpHashSetFilter(space.cachedArbiters, cpSpaceArbiterSetFilter, space)
+
+    # Prestep the arbiters and constraints.
+    slop = space.collisionSlop
+    biasCoef = 1.0 - pow(space.collisionBias, dt)
+    for i in range(arbiters.num):
+        cpArbiterPreStep(<cpArbiter *>arbiters.arr[i], dt, slop, biasCoef)
+    for i in range(constraints.num):
+        constraint = <cpConstraint *>constraints.arr[i]
+        if constraint.preSolve != NULL:
+            constraint.preSolve(constraint, space)
+        constraint.klass.preStep(constraint, dt)
+
+    # Integrate velocities.
+    damping = pow(space.damping, dt)
+    gravity = space.gravity
+    for i in range(bodies.num):
+        body = <cpBody *>bodies.arr[i]
+        body.velocity_func(body, gravity, damping, dt)
+
+    # Warm start from last step's impulses (never on the first step).
+    dt_coef = 0.0 if prev_dt == 0.0 else dt / prev_dt
+    for i in range(arbiters.num):
+        cpArbiterApplyCachedImpulse(<cpArbiter *>arbiters.arr[i], dt_coef)
+    for i in range(constraints.num):
+        constraint = <cpConstraint *>constraints.arr[i]
+        constraint.klass.applyCachedImpulse(constraint, dt_coef)
+
+    # The impulse solver: sequential passes over arbiters, then constraints.
+    for i in range(space.iterations):
+        for j in range(arbiters.num):
+            cpArbiterApplyImpulse(<cpArbiter *>arbiters.arr[j])
+        for j in range(constraints.num):
+            constraint = <cpConstraint *>constraints.arr[j]
+            constraint.klass.applyImpulse(constraint, dt)
+
+    # Post-solve callbacks: constraints, then arbiters.
+    for i in range(constraints.num):
+        constraint = <cpConstraint *>constraints.arr[i]
+        if constraint.postSolve != NULL:
+            constraint.postSolve(constraint, space)
+    for i in range(arbiters.num):
+        _callPostSolve(<cpArbiter *>arbiters.arr[i], space)
+    cpSpaceUnlock(space, 1)
+
+
+# -- components and sleeping (cpSpaceComponent.c, space side) ---------------------------------
+
+cdef void cpSpaceActivateBody(cpSpace *space, cpBody *body) noexcept nogil:
+    cdef cpShape *shape
+    cdef cpArbiter *arb
+    cdef cpBody *bodyA
+    cdef int numContacts
+    cdef cpContact *contacts
+    cdef const cpShape *shape_pair[2]
+    cdef cpHashValue arbHashID
+    cdef cpConstraint *constraint
+
+    if space.locked:
+        # Done again when the space unlocks.
+        if not cpArrayContains(space.rousedBodies, body):
+            cpArrayPush(space.rousedBodies, body)
+        return
+
+    cpArrayPush(space.dynamicBodies, body)
+
+    shape = body.shapeList
+    while shape != NULL:
+        cpSpatialIndexRemove(space.staticShapes, shape, shape.hashid)
+        cpSpatialIndexInsert(space.dynamicShapes, shape, shape.hashid)
+        shape = shape.next
+
+    arb = body.arbiterList
+    while arb != NULL:
+        bodyA = arb.body_a
+        # Both bodies of an arbiter wake together; body_a owns it (or body_b
+        # when body_a is static, as static bodies never sleep).
+        if body == bodyA or cpBodyGetType(bodyA) == CP_BODY_TYPE_STATIC:
+            numContacts = arb.count
+            contacts = arb.contacts
+            # Copy the contacts back from the heap into the contact buffer.
+            arb.contacts = cpContactBufferGetArray(space)
+            if arb.contacts != NULL:
+                memcpy(arb.contacts, contacts, numContacts * sizeof(cpContact))
+                cpSpacePushContacts(space, numContacts)
+            else:
+                arb.count = 0
+            shape_pair[0] = arb.a
+            shape_pair[1] = arb.b
+            arbHashID = CP_HASH_PAIR(<cpHashValue>arb.a, <cpHashValue>arb.b)
+            cpHashSetInsert(space.cachedArbiters, arbHashID, shape_pair, NULL, arb)
+            arb.stamp = space.stamp
+            cpArrayPush(space.arbiters, arb)
+            cpfree(contacts)
+        arb = cpArbiterNext(arb, body)
+
+    constraint = body.constraintList
+    while constraint != NULL:
+        bodyA = constraint.a
+        if body == bodyA or cpBodyGetType(bodyA) == CP_BODY_TYPE_STATIC:
+            cpArrayPush(space.constraints, constraint)
+        constraint = cpConstraintNext(constraint, body)
+
+cdef void cpSpaceDeactivateBody(cpSpace *space, cpBody *body) noexcept nogil:
+    cdef cpShape *shape
+    cdef cpArbiter *arb
+    cdef cpBody *bodyA
+    cdef size_t count
+    cdef cpContact *contacts
+    cdef cpConstraint *constraint
+
+    cpArrayDeleteObj(space.dynamicBodies, body)
+
+    shape = body.shapeList
+    while shape != NULL:
+        cpSpatialIndexRemove(space.dynamicShapes, shape, shape.hashid)
+        cpSpatialIndexInsert(space.staticShapes, shape, shape.hashid)
+        shape = shape.next
+
+    arb = body.arbiterList
+    while arb != NULL:
+        bodyA = arb.body_a
+        if body == bodyA or cpBodyGetType(bodyA) == CP_BODY_TYPE_STATIC:
+            cpSpaceUncacheArbiter(space, arb)
+            # Keep the contacts on the heap so that the buffer ring cannot
+            # recycle them while the body sleeps.
+            count = arb.count
+            contacts = <cpContact *>cpcalloc(count if count > 0 else 1, sizeof(cpContact))
+            if contacts != NULL:
+                memcpy(contacts, arb.contacts, count * sizeof(cpContact))
+            else:
+                arb.count = 0
+            arb.contacts = contacts
+        arb = cpArbiterNext(arb, body)
+
+    constraint = body.constraintList
+    while constraint != NULL:
+        bodyA = constraint.a
+        if body == bodyA or cpBodyGetType(bodyA) == CP_BODY_TYPE_STATIC:
+            cpArrayDeleteObj(space.constraints, constraint)
+        constraint = cpConstraintNext(constraint, body)
+
+cdef inline cpBody *ComponentRoot(cpBody *body) noexcept nogil:
+    return body.sleeping.root if body != NULL else NULL
+
+cdef inline void cpBodyPushArbiter(cpBody *body, cpArbiter *arb) noexcept nogil:
+    cdef cpArbiter *next = body.arbiterList
+    cpArbiterThreadForBody(arb, body).next = next
+    if next != NULL:
+        cpArbiterThreadForBody(next, body).prev = arb
+    body.arbiterList = arb
+
+cdef inline void ComponentAdd(cpBody *root, cpBody *body) noexcept nogil:
+    body.sleeping.root = root
+    if body != root:
+        body.sleeping.next = root.sleeping.next
+        root.sleeping.next = body
+
+cdef void FloodFillComponent(cpBody *root, cpBody *body) noexcept nogil:
+    # Kinematic bodies never sleep and keep what they touch awake; static
+    # bodies are asleep all the time. Recursive as in Munk2D.
+    cdef cpBody *other_root
+    cdef cpArbiter *arb
+    cdef cpConstraint *constraint
+    if cpBodyGetType(body) == CP_BODY_TYPE_DYNAMIC:
+        other_root = ComponentRoot(body)
+        if other_root == NULL:
+            ComponentAdd(root, body)
+            arb = body.arbiterList
+            while arb != NULL:
+                FloodFillComponent(root, arb.body_b if body == arb.body_a else arb.body_a)
+                arb = cpArbiterNext(arb, body)
+            constraint = body.constraintList
+            while constraint != NULL:
+                FloodFillComponent(root, constraint.b if body == constraint.a else constraint.a)
+                constraint = cpConstraintNext(constraint, body)
+
+cdef inline cpBool ComponentActive(cpBody *root, cpFloat threshold) noexcept nogil:
+    cdef cpBody *body = root
+    while body != NULL:
+        if body.sleeping.idleTime < threshold:
+            return 1
+        body = body.sleeping.next
+    return 0
+
+cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt) noexcept nogil:
+    cdef cpBool sleep = space.sleepTimeThreshold != INFINITY
+    cdef cpArray *bodies = space.dynamicBodies
+    cdef cpArray *arbiters
+    cdef cpArray *constraints
+    cdef cpFloat dv, dvsq, keThreshold
+    cdef int i, count
+    cdef cpBody *body
+    cdef cpBody *a
+    cdef cpBody *b
+    cdef cpBody *other
+    cdef cpArbiter *arb
+    cdef cpConstraint *constraint
+
+    if sleep:
+        dv = space.idleSpeedThreshold
+        dvsq = dv * dv if dv != 0.0 else cpvlengthsq(space.gravity) * dt * dt
+        # Update idle times.
+        for i in range(bodies.num):
+            body = <cpBody *>bodies.arr[i]
+            if cpBodyGetType(body) != CP_BODY_TYPE_DYNAMIC:
+                continue
+            keThreshold = body.m * dvsq if dvsq != 0.0 else 0.0
+            body.sleeping.idleTime = (0.0 if cpBodyKineticEnergy(body) > keThreshold
+                                      else body.sleeping.idleTime + dt)
+
+    # Wake sleeping bodies that are touched, and thread every arbiter into
+    # its bodies' lists (head insertion, in arbiter array order).
+    arbiters = space.arbiters
+    count = arbiters.num
+    for i in range(count):
+        arb = <cpArbiter *>arbiters.arr[i]
+        a = arb.body_a
+        b = arb.body_b
+        if sleep:
+            if cpBodyGetType(b) == CP_BODY_TYPE_KINEMATIC or cpBodyIsSleeping(a):
+                cpBodyActivate(a)
+            if cpBodyGetType(a) == CP_BODY_TYPE_KINEMATIC or cpBodyIsSleeping(b):
+                cpBodyActivate(b)
+        cpBodyPushArbiter(a, arb)
+        cpBodyPushArbiter(b, arb)
+
+    if sleep:
+        # Bodies jointed to a kinematic body stay awake.
+        constraints = space.constraints
+        i = 0
+        while i < constraints.num:
+            constraint = <cpConstraint *>constraints.arr[i]
+            a = constraint.a
+            b = constraint.b
+            if cpBodyGetType(b) == CP_BODY_TYPE_KINEMATIC:
+                cpBodyActivate(a)
+            if cpBodyGetType(a) == CP_BODY_TYPE_KINEMATIC:
+                cpBodyActivate(b)
+            i += 1
+
+        # Build the components and put the idle ones to sleep.
+        i = 0
+        while i < bodies.num:
+            body = <cpBody *>bodies.arr[i]
+            if ComponentRoot(body) == NULL:
+                FloodFillComponent(body, body)
+                if not ComponentActive(body, space.sleepTimeThreshold):
+                    cpArrayPush(space.sleepingComponents, body)
+                    other = body
+                    while other != NULL:
+                        cpSpaceDeactivateBody(space, other)
+                        other = other.sleeping.next
+                    # Deactivation swap-removed this body: same index again.
+                    continue
+            i += 1
+            # Only sleeping bodies keep their component links.
+            body.sleeping.root = NULL
+            body.sleeping.next = NULL
+
+
+# -- hooks for the body module -------------------------------------------------------------------
+
+cdef void _hookWakeComponent(cpSpace *space, cpBody *root) noexcept nogil:
+    cdef cpBody *bodyA = root
+    cdef cpBody *next
+    while bodyA != NULL:
+        next = bodyA.sleeping.next
+        bodyA.sleeping.idleTime = 0.0
+        bodyA.sleeping.root = NULL
+        bodyA.sleeping.next = NULL
+        cpSpaceActivateBody(space, bodyA)
+        bodyA = next
+    cpArrayDeleteObj(space.sleepingComponents, root)
+
+cdef void _hookBodyTypeChanged(cpSpace *space, cpBody *body, cpBodyType oldType,
+                               cpBodyType type) noexcept nogil:
+    cdef cpArray *fromArray = cpSpaceArrayForBodyType(space, oldType)
+    cdef cpArray *toArray = cpSpaceArrayForBodyType(space, type)
+    cdef cpSpatialIndex *fromIndex
+    cdef cpSpatialIndex *toIndex
+    cdef cpShape *shape
+    if fromArray != toArray:
+        cpArrayDeleteObj(fromArray, body)
+        cpArrayPush(toArray, body)
+    fromIndex = space.staticShapes if oldType == CP_BODY_TYPE_STATIC else space.dynamicShapes
+    toIndex = space.staticShapes if type == CP_BODY_TYPE_STATIC else space.dynamicShapes
+    if fromIndex != toIndex:
+        shape = body.shapeList
+        while shape != NULL:
+            cpSpatialIndexRemove(fromIndex, shape, shape.hashid)
+            cpSpatialIndexInsert(toIndex, shape, shape.hashid)
+            shape = shape.next
+
+cdef void _hookSleepWithGroup(cpBody *body, cpBody *group) noexcept nogil:
+    cdef cpSpace *space = body.space
+    cdef cpShape *shape
+    cdef cpBody *root
+    if cpBodyIsSleeping(body):
+        return
+    shape = body.shapeList
+    while shape != NULL:
+        cpShapeCacheBB(shape)
+        shape = shape.next
+    cpSpaceDeactivateBody(space, body)
+    if group != NULL:
+        root = ComponentRoot(group)
+        body.sleeping.root = root
+        body.sleeping.next = root.sleeping.next
+        body.sleeping.idleTime = 0.0
+        root.sleeping.next = body
+    else:
+        body.sleeping.root = body
+        body.sleeping.next = NULL
+        body.sleeping.idleTime = 0.0
+        cpArrayPush(space.sleepingComponents, body)
+    cpArrayDeleteObj(space.dynamicBodies, body)
+
+cdef tamias_BodySpaceHooks _hooks
+_hooks.wake_component = _hookWakeComponent
+_hooks.body_type_changed = _hookBodyTypeChanged
+_hooks.sleep_with_group = _hookSleepWithGroup
+tamias_set_body_space_hooks(&_hooks)
+
+
+# ================================================================================================
+# Python
+# ================================================================================================
+
+def empty_callback(*args, **kwargs):
+    """A callback that does nothing; pass it to :meth:`Space.on_collision` to
+    reset a collision callback to the default.
+
+    >>> import tamias2d
+    >>> space = tamias2d.Space()
+    >>> space.on_collision(1, 2, begin=tamias2d.empty_callback)
+    """
+    return None
+
+
+cdef enum:
+    _BEGIN = 0
+    _PRE_SOLVE = 1
+    _POST_SOLVE = 2
+    _SEPARATE = 3
+
+
+@cython.final
+cdef class CollisionHandler:
+    """The four callbacks (and their data) of one collision type pair.
+
+    Made by :meth:`Space.on_collision`; kept in ``Space._handlers`` under the
+    key ``(collision_type_a, collision_type_b)`` (None for a wildcard).
+
+    >>> import tamias2d
+    >>> space = tamias2d.Space()
+    >>> space.on_collision(1, 2, pre_solve=tamias2d.empty_callback)
+    >>> space._handlers[(1, 2)].begin is None
+    True
+    """
+    cdef cpCollisionHandler *_handler   # in the space's handler set (or its global one)
+    cdef object _begin
+    cdef object _pre_solve
+    cdef object _post_solve
+    cdef object _separate
+    cdef dict _data
+
+    def __init__(self, *args, **kwargs):
+        raise TypeError("CollisionHandler objects are made by Space.on_collision")
+
+    @property
+    def data(self):
+        """The data passed to each callback, per phase name ("begin",
+        "pre_solve", "post_solve", "separate")."""
+        return self._data
+
+    @property
+    def begin(self):
+        """The begin callback, or None."""
+        return self._begin
+
+    @property
+    def pre_solve(self):
+        """The pre_solve callback, or None."""
+        return self._pre_solve
+
+    @property
+    def post_solve(self):
+        """The post_solve callback, or None."""
+        return self._post_solve
+
+    @property
+    def separate(self):
+        """The separate callback, or None."""
+        return self._separate
+
+    cdef void _set(self, int which, object func):
+        cdef cpCollisionHandler *h = self._handler
+        if which == _BEGIN:
+            self._begin = func
+            h.beginFunc = cpCollisionDoNothing if func is None else _pyBegin
+        elif which == _PRE_SOLVE:
+            self._pre_solve = func
+            h.preSolveFunc = cpCollisionDoNothing if func is None else _pyPreSolve
+        elif which == _POST_SOLVE:
+            self._post_solve = func
+            h.postSolveFunc = cpCollisionDoNothing if func is None else _pyPostSolve
+        else:
+            self._separate = func
+            h.separateFunc = cpCollisionDoNothing if func is None else _pySeparate
+
+
+cdef void _callPyHandler(cpArbiter *arb, cpSpace *space, void *data, int which) noexcept with gil:
+    cdef Space pyspace = <Space>space.userData
+    cdef CollisionHandler handler = <CollisionHandler>data
+    cdef bint orig_locked = pyspace._locked
+    try:
+        if which == _BEGIN:
+            func = handler._begin
+            arg = handler._data.get("begin")
+        elif which == _PRE_SOLVE:
+            func = handler._pre_solve
+            arg = handler._data.get("pre_solve")
+        elif which == _POST_SOLVE:
+            func = handler._post_solve
+            arg = handler._data.get("post_solve")
+        else:
+            func = handler._separate
+            arg = handler._data.get("separate")
+            # A separate callback can run outside a step (shape removal):
+            # removals inside it are deferred like those inside a step.
+            pyspace._locked = True
+        if func is not None:
+            func(arbiter_wrap(arb, pyspace), pyspace, arg)
+    except BaseException as exc:
+        pyspace._store_callback_error(exc)
+    finally:
+        pyspace._locked = orig_locked
+
+cdef void _pyBegin(cpArbiter *arb, cpSpace *space, void *data) noexcept nogil:
+    _callPyHandler(arb, space, data, _BEGIN)
+
+cdef void _pyPreSolve(cpArbiter *arb, cpSpace *space, void *data) noexcept nogil:
+    _callPyHandler(arb, space, data, _PRE_SOLVE)
+
+cdef void _pyPostSolve(cpArbiter *arb, cpSpace *space, void *data) noexcept nogil:
+    _callPyHandler(arb, space, data, _POST_SOLVE)
+
+cdef void _pySeparate(cpArbiter *arb, cpSpace *space, void *data) noexcept nogil:
+    _callPyHandler(arb, space, data, _SEPARATE)
+
+
+def _arbiter_for_body(arb_ptr, space):
+    """Factory used by Body.each_arbiter: an Arbiter view of a C arbiter.
+
+    >>> import tamias2d
+    >>> s = tamias2d.Space()
+    >>> b = tamias2d.Body(1, 10)
+    >>> s.add(b, tamias2d.Circle(b, 5), tamias2d.Circle(s.static_body, 5))
+    >>> s.step(0.01)
+    >>> arbs = []
+    >>> b.each_arbiter(lambda arb: arbs.append(arb.shapes[0].body is b))
+    >>> arbs
+    [True]
+    """
+    return arbiter_wrap(<cpArbiter *><uintptr_t>arb_ptr, space)
+
+
+cdef inline object _shape_obj(const cpShape *shape):
+    return <object>shape.userData
+
+
+@cython.no_gc_clear
+cdef class Space:
+    """A world of bodies and shapes that steps forward through time.
+
+    Add bodies, shapes (and later joints) with :meth:`add`, then call
+    :meth:`step` with a fixed time step. Collision callbacks are set with
+    :meth:`on_collision`.
+
+    ``threaded`` is accepted for pymunk compatibility; the solver always runs
+    on one thread (which keeps it deterministic).
+
+    >>> import tamias2d
+    >>> space = tamias2d.Space()
+    >>> space.gravity = 0, -10
+    >>> body = tamias2d.Body(1, 10)
+    >>> space.add(body, tamias2d.Circle(body, 1))
+    >>> for _ in range(10):
+    ...     space.step(0.01)
+    >>> round(body.velocity.y, 6)
+    -1.0
+    """
+
+    def __cinit__(self, *args, **kwargs):
+        if cpSpaceInit(&self._space) == NULL:
+            cpTakeOutOfMemory()
+            raise MemoryError("not enough memory for a new Space")
+        self._initialized = True
+        self._space.userData = <void *>self
+        self._bodies = {}
+        self._shapes = {}
+        self._constraints = {}
+        self._static_body = None
+        self._handlers = {}
+        self._post_step_callbacks = {}
+        self._add_later = {}
+        self._remove_later = {}
+        self._locked = False
+        self._callback_error = None
+        self.threaded = False
+
+    def __init__(self, threaded=False):
+        self.threaded = bool(threaded) and platform.system() != "Windows"
+
+    def __dealloc__(self):
+        cdef cpCollisionHandler *h
+        if not self._initialized:
+            return
+        # No Python callback may run while the space is torn down.
+        self._space.globalHandler.beginFunc = cpCollisionDoNothing
+        self._space.globalHandler.preSolveFunc = cpCollisionDoNothing
+        self._space.globalHandler.postSolveFunc = cpCollisionDoNothing
+        self._space.globalHandler.separateFunc = cpCollisionDoNothing
+        if self._handlers is not None:
+            for handler in self._handlers.values():
+                h = (<CollisionHandler>handler)._handler
+                h.beginFunc = cpCollisionDoNothing
+                h.preSolveFunc = cpCollisionDoNothing
+                h.postSolveFunc = cpCollisionDoNothing
+                h.separateFunc = cpCollisionDoNothing
+        self._space.locked = 0
+        # Detach every shape and body, as pymunk does when its space is freed.
+        cdef cpBody *body
+        if self._shapes is not None:
+            for shape in list(self._shapes):
+                (<Shape>shape)._space = None
+                if (<Shape>shape)._shape.space == &self._space:
+                    cpSpaceRemoveShape(&self._space, (<Shape>shape)._shape)
+        bodies = list(self._bodies) if self._bodies is not None else []
+        if self._static_body is not None:
+            bodies.append(self._static_body)
+        for b in bodies:
+            (<Body>b)._space = None
+            body = &(<Body>b)._body
+            if body.space == &self._space:
+                cpSpaceRemoveBody(&self._space, body)
+        cpSpaceDestroy(&self._space)
+        self._initialized = False
+
+    # -- errors raised inside callbacks ----------------------------------------------------
+
+    def _store_callback_error(self, exc):
+        """Keep the first exception raised by a user callback during a C
+        call; it is re-raised when that call returns."""
+        if self._callback_error is None:
+            self._callback_error = exc
+
+    cdef int _raise_callback_error(self) except -1:
+        exc = self._callback_error
+        if exc is not None:
+            self._callback_error = None
+            raise exc
+        return 0
+
+    cdef int _check_c_errors(self) except -1:
+        if cpTakeOutOfMemory():
+            raise MemoryError("the space ran out of memory; some contacts were dropped")
+        collision_check_flags()
+        return 0
+
+    # -- properties ------------------------------------------------------------------------
+
+    @property
+    def shapes(self):
+        """The shapes in the space, a live view in the order they were added.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> s.add(tamias2d.Circle(s.static_body, 1))
+        >>> len(s.shapes)
+        1
+        """
+        return self._shapes.keys()
+
+    @property
+    def bodies(self):
+        """The bodies in the space (static ones included, the space's own
+        ``static_body`` excluded), a live view in the order they were added.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> s.add(tamias2d.Body())
+        >>> len(s.bodies)
+        1
+        """
+        return self._bodies.keys()
+
+    @property
+    def constraints(self):
+        """The constraints in the space (a live view).
+
+        >>> import tamias2d
+        >>> len(tamias2d.Space().constraints)
+        0
+        """
+        return self._constraints.keys()
+
+    @property
+    def static_body(self):
+        """A static body owned by the space, made on first use; handy for
+        attaching ground and walls.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> s.static_body.body_type == tamias2d.Body.STATIC
+        True
+        """
+        if self._static_body is None:
+            body = Body(body_type=Body.STATIC)
+            (<Body>body)._space = weakref.ref(self)
+            if cpSpaceAddBody(&self._space, &(<Body>body)._body) == NULL:
+                (<Body>body)._space = None
+                cpTakeOutOfMemory()
+                raise MemoryError("not enough memory to add the static body")
+            self._static_body = body
+        return self._static_body
+
+    @property
+    def iterations(self):
+        """Solver iterations per step (default 10). More iterations give
+        stiffer contacts at a higher cost.
+
+        >>> import tamias2d
+        >>> tamias2d.Space().iterations
+        10
+        """
+        return self._space.iterations
+
+    @iterations.setter
+    def iterations(self, value):
+        cdef long v = value
+        if v <= 0 or v > 2147483647:
+            raise ValueError("iterations must be a positive integer")
+        self._space.iterations = <int>v
+
+    @property
+    def gravity(self):
+        """Gravity applied to every dynamic body, default (0, 0).
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> s.gravity = 0, -900
+        >>> s.gravity
+        Vec2d(0.0, -900.0)
+        """
+        return vec2d_from_cpv(self._space.gravity)
+
+    @gravity.setter
+    def gravity(self, gravity_vector):
+        cdef cpVect g = cpv_from_object_finite(gravity_vector, "gravity")
+        cpSpaceSetGravity(&self._space, g)
+
+    @property
+    def damping(self):
+        """Fraction of velocity a body keeps per second (default 1: no
+        damping). 0.9 loses 10% per second.
+
+        >>> import tamias2d
+        >>> tamias2d.Space().damping
+        1.0
+        """
+        return self._space.damping
+
+    @damping.setter
+    def damping(self, damping):
+        cdef double d = damping
+        if not (d >= 0.0) or not isfinite(d):
+            raise ValueError("damping must be a finite number >= 0")
+        self._space.damping = d
+
+    @property
+    def idle_speed_threshold(self):
+        """Speed under which a body counts as idle for sleeping; 0 (the
+        default) derives it from gravity.
+
+        >>> import tamias2d
+        >>> tamias2d.Space().idle_speed_threshold
+        0.0
+        """
+        return self._space.idleSpeedThreshold
+
+    @idle_speed_threshold.setter
+    def idle_speed_threshold(self, value):
+        self._space.idleSpeedThreshold = value
+
+    @property
+    def sleep_time_threshold(self):
+        """Idle time after which a group of bodies falls asleep; ``inf``
+        (the default) turns sleeping off.
+
+        >>> import tamias2d
+        >>> tamias2d.Space().sleep_time_threshold
+        inf
+        """
+        return self._space.sleepTimeThreshold
+
+    @sleep_time_threshold.setter
+    def sleep_time_threshold(self, value):
+        self._space.sleepTimeThreshold = value
+
+    @property
+    def collision_slop(self):
+        """Overlap allowed between shapes before they are pushed apart
+        (default 0.1 as a C float: 0.10000000149011612).
+
+        >>> import tamias2d
+        >>> tamias2d.Space().collision_slop
+        0.10000000149011612
+        """
+        return self._space.collisionSlop
+
+    @collision_slop.setter
+    def collision_slop(self, value):
+        self._space.collisionSlop = value
+
+    @property
+    def collision_bias(self):
+        """Fraction of overlap left uncorrected after one second (default
+        ``pow(1 - 0.1, 60)`` in C floats).
+
+        >>> import tamias2d
+        >>> tamias2d.Space().collision_bias
+        0.0017970074436457143
+        """
+        return self._space.collisionBias
+
+    @collision_bias.setter
+    def collision_bias(self, value):
+        self._space.collisionBias = value
+
+    @property
+    def collision_persistence(self):
+        """Steps an arbiter is kept after its shapes separate (default 3).
+
+        >>> import tamias2d
+        >>> tamias2d.Space().collision_persistence
+        3
+        """
+        return self._space.collisionPersistence
+
+    @collision_persistence.setter
+    def collision_persistence(self, value):
+        if isinstance(value, float):
+            if value != int(value):
+                raise ValueError("collision_persistence must be a whole number of steps")
+            value = int(value)
+        cdef long long v = value
+        if v < 0 or v > 4294967295:
+            raise ValueError("collision_persistence must be between 0 and 2**32-1")
+        self._space.collisionPersistence = <cpTimestamp>v
+
+    @property
+    def current_time_step(self):
+        """The dt of the step in progress (in a callback) or of the last one.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> s.step(0.25)
+        >>> s.current_time_step
+        0.25
+        """
+        return self._space.curr_dt
+
+    @property
+    def threads(self):
+        """Solver threads: always 1 (tamias2d's solver is single-threaded,
+        which keeps it deterministic). Setting it has no effect.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space(threaded=True)
+        >>> s.threads = 2
+        >>> s.threads
+        1
+        """
+        return 1
+
+    @threads.setter
+    def threads(self, n):
+        pass
+
+    # -- adding and removing ---------------------------------------------------------------
+
+    def add(self, *objs):
+        """Add bodies and shapes (in any order: bodies go in first).
+
+        Inside a step (from a callback) the objects are added when the step
+        ends, in the order they were passed.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> b = tamias2d.Body(1, 10)
+        >>> c = tamias2d.Circle(b, 5)
+        >>> s.add(c, b)
+        >>> list(s.bodies) == [b] and list(s.shapes) == [c]
+        True
+        """
+        if self._locked:
+            for o in objs:
+                self._add_later[o] = None
+            return
+        if cpSpaceIsLocked(&self._space):
+            raise SpaceLocked("the space is locked (a query or debug draw is running)")
+        for o in objs:
+            if not isinstance(o, (Body, Shape)):
+                raise TypeError(f"Unsupported type {type(o)} of {o!r}: "
+                                "only bodies and shapes can be added to a Space")
+        for o in objs:
+            if isinstance(o, Body):
+                self._add_body(<Body>o)
+        for o in objs:
+            if isinstance(o, Shape):
+                self._add_shape(<Shape>o)
+
+    cdef _add_body(self, Body body):
+        if body in self._bodies:
+            raise AlreadyInSpace("Body already added to this space.")
+        if body.space is not None:
+            raise AlreadyInSpace("Body already added to another space.")
+        body._space = weakref.ref(self)
+        if cpSpaceAddBody(&self._space, &body._body) == NULL:
+            body._space = None
+            cpTakeOutOfMemory()
+            raise MemoryError("not enough memory to add the body")
+        self._bodies[body] = None
+
+    cdef _add_shape(self, Shape shape):
+        if shape in self._shapes:
+            raise AlreadyInSpace("Shape already added to space.")
+        if shape.space is not None:
+            raise AlreadyInSpace(
+                "Shape already added to another space. A shape can only be in one space at a time.")
+        body = shape.body
+        if body is None or shape._shape.body == NULL:
+            raise IllegalShape("The shape's body is not set.")
+        if body.space is not self or (<Body>body)._body.space != &self._space:
+            raise NotInSpace("The shape's body must be added to the space before "
+                             "(or at the same time) as the shape.")
+        shape._space = weakref.ref(self)
+        self._shapes[shape] = None
+        cpSpaceAddShape(&self._space, shape._shape)
+        if cpTakeOutOfMemory():
+            raise MemoryError("the space ran out of memory while adding the shape")
+
+    def remove(self, *objs):
+        """Remove bodies and shapes.
+
+        Inside a step (from a callback) the removal happens when the step
+        ends. Removing a shape that touches another calls the ``separate``
+        callbacks at once.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> b = tamias2d.Body(1, 10)
+        >>> c = tamias2d.Circle(b, 5)
+        >>> s.add(b, c)
+        >>> s.remove(c, b)
+        >>> len(s.shapes), len(s.bodies)
+        (0, 0)
+        """
+        if self._locked:
+            for o in objs:
+                self._remove_later[o] = None
+            return
+        if cpSpaceIsLocked(&self._space):
+            raise SpaceLocked("the space is locked (a query or debug draw is running)")
+        self._remove(objs)
+        removed = set()
+        while self._remove_later:
+            to_remove, _ = self._remove_later.popitem()
+            if to_remove not in removed:
+                self._remove((to_remove,))
+                removed.add(to_remove)
+        self._raise_callback_error()
+
+    cdef _remove(self, tuple objs):
+        for o in objs:
+            if isinstance(o, Body):
+                self._remove_body(<Body>o)
+            elif isinstance(o, Shape):
+                self._remove_shape(<Shape>o)
+            else:
+                raise TypeError(f"Unsupported type {type(o)} of {o!r}")
+
+    cdef _remove_shape(self, Shape shape):
+        if shape not in self._shapes:
+            raise NotInSpace("shape not in space, already removed?")
+        shape._space = None
+        if shape._shape.space == &self._space:
+            cpSpaceRemoveShape(&self._space, shape._shape)
+        del self._shapes[shape]
+
+    cdef _remove_body(self, Body body):
+        if body not in self._bodies:
+            raise NotInSpace("body not in space, already removed?")
+        body._space = None
+        if body._body.space == &self._space:
+            cpSpaceRemoveBody(&self._space, &body._body)
+        del self._bodies[body]
+
+    # -- reindexing --------------------------------------------------------------------------
+
+    def reindex_shape(self, shape):
+        """Update the broad phase data of one shape (after moving a static
+        body, for example).
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> c = tamias2d.Circle(s.static_body, 5)
+        >>> s.add(c)
+        >>> s.static_body.position = 100, 0
+        >>> s.reindex_shape(c)
+        >>> c.bb.left
+        95.0
+        """
+        cdef Shape sh = shape
+        if cpSpaceIsLocked(&self._space):
+            raise SpaceLocked("You cannot manually reindex objects while the space is locked. "
+                              "Wait until the current query or step is complete.")
+        if sh._shape.space != &self._space:
+            raise NotInSpace("the shape is not in this space")
+        cpSpaceReindexShape(&self._space, sh._shape)
+
+    def reindex_shapes_for_body(self, body):
+        """Update the broad phase data of every shape of a body.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> c = tamias2d.Circle(s.static_body, 5)
+        >>> s.add(c)
+        >>> s.static_body.position = 0, 100
+        >>> s.reindex_shapes_for_body(s.static_body)
+        >>> c.bb.bottom
+        95.0
+        """
+        cdef Body b = body
+        if cpSpaceIsLocked(&self._space):
+            raise SpaceLocked("You cannot manually reindex objects while the space is locked. "
+                              "Wait until the current query or step is complete.")
+        cpSpaceReindexShapesForBody(&self._space, &b._body)
+
+    def reindex_static(self):
+        """Update the broad phase data of every static shape (after moving
+        static bodies).
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> c = tamias2d.Circle(s.static_body, 5)
+        >>> s.add(c)
+        >>> s.static_body.position = -50, 0
+        >>> s.reindex_static()
+        >>> c.bb.right
+        -45.0
+        """
+        if cpSpaceIsLocked(&self._space):
+            raise SpaceLocked("You cannot manually reindex objects while the space is locked. "
+                              "Wait until the current query or step is complete.")
+        cpSpaceReindexStatic(&self._space)
+
+    # -- the step ----------------------------------------------------------------------------
+
+    cdef int _check_bodies(self) except -1:
+        cdef cpArray *bodies = self._space.dynamicBodies
+        cdef cpBody *body
+        cdef int i
+        for i in range(bodies.num):
+            body = <cpBody *>bodies.arr[i]
+            if cpBodyGetType(body) != CP_BODY_TYPE_DYNAMIC:
+                continue
+            if not (body.m > 0.0 and body.m < INFINITY and body.i > 0.0):
+                b = <object>body.userData if body.userData != NULL else None
+                raise IllegalBody(
+                    f"Dynamic bodies must have a mass > 0 and < inf and moment > 0. "
+                    f"{b!r} has mass {body.m}, moment {body.i}.")
+        return 0
+
+    def step(self, dt):
+        """Advance the simulation by ``dt`` (a fixed dt gives the most
+        stable results).
+
+        Objects added or removed from callbacks are added or removed when
+        the step ends, then post-step callbacks run. An exception raised in
+        a callback is re-raised here, after the step has finished.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> for _ in range(10):
+        ...     s.step(0.01)
+        """
+        cdef double cdt = dt
+        if not isfinite(cdt):
+            raise ValueError(f"dt must be a finite number, not {dt!r}")
+        if cpSpaceIsLocked(&self._space) or self._locked:
+            raise SpaceLocked("step() cannot be called from inside a step or a query")
+        self._check_bodies()
+        self._locked = True
+        try:
+            with nogil:
+                cpSpaceStep(&self._space, cdt)
+        finally:
+            self._locked = False
+        try:
+            self._check_c_errors()
+        finally:
+            self._after_step()
+
+    cdef _after_step(self):
+        cdef list later
+        if self._add_later:
+            later = list(self._add_later)
+            self._add_later.clear()
+            self.add(*later)
+        removed = set()
+        while self._remove_later:
+            to_remove, _ = self._remove_later.popitem()
+            if to_remove not in removed:
+                removed.add(to_remove)
+                self._remove((to_remove,))
+        callbacks = self._post_step_callbacks
+        self._post_step_callbacks = {}
+        try:
+            for key in callbacks:
+                callbacks[key](self)
+        finally:
+            self._raise_callback_error()
+
+    # -- callbacks ---------------------------------------------------------------------------
+
+    def on_collision(self, collision_type_a=None, collision_type_b=None, begin=None,
+                     pre_solve=None, post_solve=None, separate=None, data=None):
+        """Set the callbacks for collisions between shapes of two collision
+        types (None is a wildcard; ``(None, None)`` is every collision).
+
+        Each callback is ``f(arbiter, space, data)``; its return value is
+        ignored (set ``arbiter.process_collision`` to reject a collision).
+        Phases: ``begin`` (first step of contact), ``pre_solve`` (every
+        step, before solving), ``post_solve`` (after solving), ``separate``
+        (the step the shapes part, or when one is removed). A later call for
+        the same types replaces the callbacks it passes; pass
+        :func:`empty_callback` to reset one. When several handlers match,
+        they run in the order (a, b), (b, a), (a, None), (b, None),
+        (None, None).
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> b = tamias2d.Body(1, 10)
+        >>> c = tamias2d.Circle(b, 5)
+        >>> c.collision_type = 1
+        >>> s.add(b, c, tamias2d.Circle(s.static_body, 5))
+        >>> log = []
+        >>> s.on_collision(1, None, begin=lambda arb, space, data: log.append(data), data="hit")
+        >>> s.step(0.01)
+        >>> log
+        ['hit']
+        """
+        cdef cpCollisionHandler *h
+        cdef cpCollisionType ta, tb
+        cdef CollisionHandler ch
+        if collision_type_a is None and collision_type_b is not None:
+            raise ValueError(
+                "collision_type_a can not be None if collision_type_b is not None. "
+                "Please swap them.")
+        key = (collision_type_a, collision_type_b)
+        if key not in self._handlers:
+            ta = CP_WILDCARD_COLLISION_TYPE if collision_type_a is None else collision_type_a
+            tb = CP_WILDCARD_COLLISION_TYPE if collision_type_b is None else collision_type_b
+            h = cpSpaceAddCollisionHandler(&self._space, ta, tb)
+            if h == NULL:
+                cpTakeOutOfMemory()
+                raise MemoryError("not enough memory for a collision handler")
+            ch = CollisionHandler.__new__(CollisionHandler)
+            ch._handler = h
+            ch._data = {}
+            h.userData = <void *>ch
+            self._handlers[key] = ch
+        else:
+            ch = self._handlers[key]
+        for which, func, name in ((_BEGIN, begin, "begin"), (_PRE_SOLVE, pre_solve, "pre_solve"),
+                                  (_POST_SOLVE, post_solve, "post_solve"),
+                                  (_SEPARATE, separate, "separate")):
+            if func is empty_callback:
+                ch._set(which, None)
+            elif func is not None:
+                if not callable(func):
+                    raise TypeError(f"{name} must be callable, not {type(func).__name__}")
+                ch._set(which, func)
+                ch._data[name] = data
+
+    def add_post_step_callback(self, callback_function, key, *args, **kwargs):
+        """Call ``callback_function(space, key, *args, **kwargs)`` once, after
+        the next step ends. One callback per key; returns False (and adds
+        nothing) if the key is already taken.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> s.add_post_step_callback(lambda space, key: print("after", key), 1)
+        True
+        >>> s.add_post_step_callback(print, 1)
+        False
+        >>> s.step(0.01)
+        after 1
+        """
+        if key in self._post_step_callbacks:
+            return False
+
+        def f(space):
+            callback_function(self, key, *args, **kwargs)
+
+        self._post_step_callbacks[key] = f
+        return True
+
+    # -- debug drawing -------------------------------------------------------------------------
+
+    def debug_draw(self, options):
+        """Draw the space with a :class:`SpaceDebugDrawOptions` backend:
+        shapes, then constraints, then contact points, as the options'
+        flags ask.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> s.add(tamias2d.Circle(s.static_body, 10))
+        >>> s.debug_draw(tamias2d.SpaceDebugDrawOptions())  # doctest: +NORMALIZE_WHITESPACE
+        draw_circle (Vec2d(0.0, 0.0), 0.0, 10.0,
+            SpaceDebugColor(r=44.0, g=62.0, b=80.0, a=255.0),
+            SpaceDebugColor(r=149.0, g=165.0, b=166.0, a=255.0))
+        """
+        if not getattr(options, "_use_chipmunk_debug_draw", True):
+            for shape in self.shapes:
+                options.draw_shape(shape)
+            return
+        with options:
+            self._debug_draw(options)
+
+    cdef _debug_draw(self, options):
+        cdef cpTransform t = cptransform_from_object(options.transform)
+        cdef unsigned long flags = options.flags
+        cdef list shapes
+        cdef Shape sh
+        cdef cpShape *shape
+        cdef cpBody *body
+        cdef cpCircleShape *circle
+        cdef cpSegmentShape *seg
+        cdef cpPolyShape *poly
+        cdef cpVect tc, tc2, pp0, pp1, ta, tb, ta2, p, v2, p1, p2, pa, pb, n
+        cdef cpFloat r, angle
+        cdef int i, j, count
+        cdef cpArbiter *arb
+        cdef cpArray *arbiters
+
+        if flags & 1:
+            # Shapes in cpSpaceEachShape order: dynamic tree, then static tree.
+            shapes = []
+            cpSpaceEachShape(&self._space, _collectShape, <void *>shapes)
+            for obj in shapes:
+                sh = <Shape>obj
+                shape = sh._shape
+                if shape.space != &self._space:
+                    continue  # removed by an earlier draw call
+                body = shape.body
+                outline = options.shape_outline_color
+                fill = options._c(options.color_for_shape(sh))
+                if shape.klass.type == CP_CIRCLE_SHAPE:
+                    circle = <cpCircleShape *>shape
+                    tc = cpTransformPoint(t, circle.tc)
+                    tc2 = cpTransformPoint(t, cpv(circle.tc.x + circle.r, circle.tc.y))
+                    r = cpvdist(tc, tc2)
+                    pp0 = cpTransformPoint(t, cpv(0.0, 0.0))
+                    pp1 = cpTransformPoint(t, cpv(1.0, 0.0))
+                    angle = body.a + atan2(pp1.y - pp0.y, pp1.x - pp0.x)
+                    options.draw_circle(vec2d_from_cpv(tc), angle, r, outline, fill)
+                elif shape.klass.type == CP_SEGMENT_SHAPE:
+                    seg = <cpSegmentShape *>shape
+                    ta = cpTransformPoint(t, seg.ta)
+                    tb = cpTransformPoint(t, seg.tb)
+                    ta2 = cpTransformPoint(t, cpv(seg.ta.x + seg.r, seg.ta.y))
+                    r = cpvdist(ta, ta2)
+                    options.draw_fat_segment(vec2d_from_cpv(ta), vec2d_from_cpv(tb), r,
+                                             outline, fill)
+                elif shape.klass.type == CP_POLY_SHAPE:
+                    poly = <cpPolyShape *>shape
+                    count = poly.count
+                    r = poly.r
+                    verts = []
+                    for i in range(count):
+                        p = cpTransformPoint(t, poly.planes[i].v0)
+                        if i == 0:
+                            v2 = cpTransformPoint(t, cpv(poly.planes[0].v0.x + r, poly.planes[0].v0.y))
+                            r = cpvdist(p, v2)
+                        verts.append(vec2d_from_cpv(p))
+                    options.draw_polygon(verts, r, outline, fill)
+
+        # (flags & 2: constraints; none can be added yet.)
+
+        if flags & 4:
+            color = options.collision_point_color
+            segments = []
+            arbiters = self._space.arbiters
+            for i in range(arbiters.num):
+                arb = <cpArbiter *>arbiters.arr[i]
+                n = arb.n
+                for j in range(arb.count):
+                    p1 = cpvadd(arb.body_a.p, arb.contacts[j].r1)
+                    p2 = cpvadd(arb.body_b.p, arb.contacts[j].r2)
+                    pa = cpTransformPoint(t, cpvadd(p1, cpvmult(n, -2.0)))
+                    pb = cpTransformPoint(t, cpvadd(p2, cpvmult(n, 2.0)))
+                    segments.append((pa.x, pa.y, pb.x, pb.y))
+            for ax, ay, bx, by in segments:
+                # pymunk skips segments with a NaN end point.
+                if math.isnan(ax) or math.isnan(ay) or math.isnan(bx) or math.isnan(by):
+                    continue
+                options.draw_segment(vec2d_from_cpv(cpv(ax, ay)), vec2d_from_cpv(cpv(bx, by)), color)
+
+    def __repr__(self):
+        return f"Space(bodies={len(self._bodies)}, shapes={len(self._shapes)})"
+
+
+cdef void _collectShape(void *obj, void *data) noexcept with gil:
+    (<list>data).append(<object>(<cpShape *>obj).userData)
