@@ -9,6 +9,7 @@ version = "0.1.0"
 chipmunk_version = "2.0.1-tamias2d"
 
 from . import errors
+from .body import Body
 from .space_debug_draw_options import SpaceDebugDrawOptions
 from .vector import Vec2d, BB, Transform
 from .arbiter import Arbiter

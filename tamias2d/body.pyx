@@ -51,6 +51,7 @@ cdef inline void _apply_impulse(cpBody *body, cpVect j, cpVect r) noexcept nogil
 cdef tamias_BodySpaceHooks _hooks
 
 cdef void tamias_set_body_space_hooks(const tamias_BodySpaceHooks *hooks) noexcept nogil:
+    global _hooks
     _hooks = hooks[0]
 
 

@@ -662,29 +662,269 @@ def test_every_public_member_has_an_example():
 
 
 # -- with shapes and a space (run once tamias2d.shape and tamias2d.space exist) -------------
-def _need_space():
-    pytest.importorskip("tamias2d.shape")
-    pytest.importorskip("tamias2d.space")
+def _space_modules():
+    shape = pytest.importorskip("tamias2d.shape")
+    space = pytest.importorskip("tamias2d.space")
+    return space.Space, shape.Circle, shape.Segment, shape.Poly
 
 
-def test_mass_moment_from_shapes_like_pymunk():
-    _need_space()
-    rng = random.Random(5)
-    for trial in range(30):
-        spaces = (tamias2d.Space(), pymunk.Space())
-        bodies = []
-        for mod, space in zip((tamias2d, pymunk), spaces):
-            b = mod.Body()
-            b.position = (3, 4)
-            b.angle = 0.3
-            bodies.append(b)
-            space.add(b)
-        specs = []
-        for _ in range(rng.randint(1, 5)):
-            specs.append((rng.uniform(0.1, 5), rand_vec(rng, 10), rng.uniform(0.1, 10)))
-        for (mod, space), b in zip(zip((tamias2d, pymunk), spaces), bodies):
-            for r, off, mass in specs:
-                c = mod.Circle(b, r, off)
-                c.mass = mass
-                space.add(c)
-        assert_same(bodies[0], bodies[1], "trial %d" % trial)
+def _shape_spec(rng):
+    kind = rng.choice(["circle", "segment", "poly", "box"])
+    if kind == "circle":
+        return kind, (rng.uniform(0.1, 5), rand_vec(rng, 10))
+    if kind == "segment":
+        return kind, (rand_vec(rng, 10), rand_vec(rng, 10), rng.uniform(0, 2))
+    if kind == "poly":
+        return kind, ([rand_vec(rng, 10) for _ in range(rng.randint(3, 7))], rng.uniform(0, 1))
+    return kind, ((rng.uniform(0.5, 10), rng.uniform(0.5, 10)), rng.uniform(0, 1))
+
+
+def _make_shape(mod, classes, body, spec):
+    Circle, Segment, Poly = classes
+    kind, args = spec
+    if kind == "circle":
+        return Circle(body, args[0], args[1])
+    if kind == "segment":
+        return Segment(body, *args)
+    if kind == "poly":
+        return Poly(body, args[0], None, args[1])
+    return Poly.create_box(body, *args)
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_mass_accumulation_from_shapes_like_pymunk(seed):
+    # cpBodyAccumulateMassFromShapes: shapeList order (reverse add order),
+    # parallel-axis merge, CoG lerp, origin kept. Shapes get their mass or
+    # density before or after being added, and some are removed again.
+    Space, Circle, Segment, Poly = _space_modules()
+    rng = random.Random(6000 + seed)
+    t_space, p_space = Space(), pymunk.Space()
+    tb, pb = Body(), pymunk.Body()
+    pos, ang = rand_vec(rng), rand_float(rng, 3)
+    for b, space in ((tb, t_space), (pb, p_space)):
+        b.position = pos
+        b.angle = ang
+        space.add(b)
+    t_shapes, p_shapes = [], []
+    for i in range(rng.randint(1, 6)):
+        spec = _shape_spec(rng)
+        use_density = rng.random() < 0.5
+        value = rng.uniform(0.1, 10)
+        before = rng.random() < 0.5
+        ts = _make_shape(tamias2d, (Circle, Segment, Poly), tb, spec)
+        ps = _make_shape(pymunk, (pymunk.Circle, pymunk.Segment, pymunk.Poly), pb, spec)
+        for s, space in ((ts, t_space), (ps, p_space)):
+            if before:
+                setattr(s, "density" if use_density else "mass", value)
+                space.add(s)
+            else:
+                space.add(s)
+                setattr(s, "density" if use_density else "mass", value)
+        t_shapes.append(ts)
+        p_shapes.append(ps)
+        assert_same(tb, pb, "seed %d after shape %d %r" % (seed, i, spec))
+    while len(t_shapes) > 1:
+        k = rng.randrange(len(t_shapes))
+        t_space.remove(t_shapes.pop(k))
+        p_space.remove(p_shapes.pop(k))
+        assert_same(tb, pb, "seed %d after removing shape %d" % (seed, k))
+
+
+def test_pymunk_mass_moment_from_shape():
+    Space, Circle, Segment, Poly = _space_modules()
+    s = Space()
+    b = Body()
+    b.mass = 2
+    c = Circle(b, 10, (2, 3))
+    c.mass = 3
+    assert b.mass == 0      # re-accumulated from the (still empty) shape list
+    s.add(b, c)
+    assert b.mass == 3
+    c.mass = 4
+    assert b.mass == 4
+    assert b.center_of_gravity == (2, 3)
+    assert b.moment == 200
+
+
+def test_mass_and_moment_in_space():
+    Space, Circle, Segment, Poly = _space_modules()
+    s = Space()
+    b = Body(2, 3)
+    s.add(b)
+    assert b.space is s
+    for bad in (0, math.inf):
+        with pytest.raises(AssertionError):
+            b.mass = bad
+    with pytest.raises(AssertionError):
+        b.moment = 0
+    b.moment = math.inf
+    s.remove(b)
+    assert b.space is None
+    b.mass = 0
+    b.moment = 0
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_body_type_changes_in_space(seed):
+    # The in-space half of cpBodySetType goes through the space hook; the
+    # body then keeps stepping exactly like pymunk's.
+    Space, Circle, Segment, Poly = _space_modules()
+    rng = random.Random(7000 + seed)
+    t_space, p_space = Space(), pymunk.Space()
+    for s in (t_space, p_space):
+        s.gravity = (0, -10)
+    tb, pb = make_pair(1, 1, rng.choice([0, 1, 2]))
+    radius, off = rng.uniform(0.5, 2), rand_vec(rng, 2)
+    tc, pc = Circle(tb, radius, off), pymunk.Circle(pb, radius, off)
+    tc.density = pc.density = 2.0
+    t_space.add(tb, tc)
+    p_space.add(pb, pc)
+    for i in range(10):
+        t = rng.choice([0, 1, 2])
+        tb.body_type = pb.body_type = t
+        v = rand_vec(rng, 5)
+        tb.velocity = pb.velocity = v
+        for _ in range(3):
+            t_space.step(1 / 60)
+            p_space.step(1 / 60)
+        assert_same(tb, pb, "seed %d change %d to type %d" % (seed, i, t))
+
+
+def test_integrators_in_a_step():
+    Space, Circle, Segment, Poly = _space_modules()
+    for mod, S, B in ((tamias2d, Space, Body), (pymunk, pymunk.Space, pymunk.Body)):
+        s = S()
+        b = B(1, 1)
+
+        def f(body, dt):
+            body.position += 0, dt
+
+        b.position_func = f
+        s.add(b)
+        s.step(10)
+        assert b.position == (0, 10)
+        s.step(1)
+        s.step(1)
+        assert b.position.y == 12
+        b.position_func = B.update_position
+        s.step(1)
+        assert b.position.y == 12
+
+    calls = []
+    s = Space()
+    s.gravity = (1, 2)
+    s.damping = 0.5
+    b = Body(1, 1)
+    b.velocity_func = lambda body, g, d, dt: calls.append((body, g, d, dt))
+    s.add(b)
+    s.step(0.25)
+    assert calls == [(b, (1, 2), 0.5 ** 0.25, 0.25)]
+    assert type(calls[0][1]) is type(b.position)
+
+
+def test_integrator_exception_reraised_by_step():
+    Space, Circle, Segment, Poly = _space_modules()
+    s = Space()
+    b = Body(1, 1)
+
+    def bad(body, gravity, damping, dt):
+        raise KeyError("vf")
+
+    b.velocity_func = bad
+    s.add(b)
+    with pytest.raises(KeyError):
+        s.step(0.1)
+    b.velocity_func = None
+    b.position_func = lambda body, dt: 1 / 0
+    with pytest.raises(ZeroDivisionError):
+        s.step(0.1)
+    b.position_func = None
+    s.step(0.1)         # the space is usable again
+
+
+def test_sleep_and_sleep_with_group():
+    Space, Circle, Segment, Poly = _space_modules()
+    b = Body(1, 1)
+    s = Space()
+    s.sleep_time_threshold = 0.01
+    assert not b.is_sleeping
+    with pytest.raises(Exception):
+        b.sleep()
+    s.add(b)
+    b.sleep()
+    assert b.is_sleeping
+    b.activate()
+    assert not b.is_sleeping
+    b.sleep()
+    s.remove(b)
+    b.activate()
+
+    b1, b2 = Body(1, 1), Body(2, 2)
+    s = Space()
+    s.sleep_time_threshold = 0.01
+    s.add(b2)
+    b2.sleep()
+    with pytest.raises(Exception):
+        b1.sleep_with_group(b2)
+    s.add(b1)
+    with pytest.raises(IllegalBody):
+        b1.sleep_with_group(Body(1, 1))     # not sleeping: not a group
+    b1.sleep_with_group(b2)
+    assert b1.is_sleeping
+    b2.activate()
+    assert not b1.is_sleeping
+
+
+def test_sleep_errors_instead_of_aborts():
+    Space, Circle, Segment, Poly = _space_modules()
+    s = Space()
+    b = Body(1, 1)
+    s.add(b)
+    with pytest.raises(RuntimeError):       # sleeping not enabled
+        b.sleep()
+    s.sleep_time_threshold = 1
+    k = Body(body_type=Body.KINEMATIC)
+    s.add(k)
+    with pytest.raises(IllegalBody):
+        k.sleep()
+    b.sleep()
+    with pytest.raises(IllegalBody):        # already asleep in its own group
+        b.sleep()
+
+
+def test_setters_wake_a_sleeping_body():
+    Space, Circle, Segment, Poly = _space_modules()
+    for attr, value in [("position", (1, 2)), ("velocity", (1, 0)), ("force", (1, 0)),
+                        ("angle", 1.0), ("angular_velocity", 1.0), ("torque", 1.0),
+                        ("center_of_gravity", (1, 1)), ("mass", 3), ("moment", 4)]:
+        s = Space()
+        s.sleep_time_threshold = 1
+        b = Body(1, 1)
+        s.add(b)
+        b.sleep()
+        assert b.is_sleeping
+        setattr(b, attr, value)
+        assert not b.is_sleeping, attr
+
+
+def test_each_arbiter_like_pymunk():
+    Space, Circle, Segment, Poly = _space_modules()
+    results = []
+    for S, B, C in ((Space, Body, Circle), (pymunk.Space, pymunk.Body, pymunk.Circle)):
+        s = S()
+        b1, b2, b3 = B(1, 1), B(1, 1), B(1, 1)
+        b3.position = (5, 0)
+        c1, c2, c3 = C(b1, 10), C(b2, 10), C(b3, 10)
+        s.add(b1, b2, b3, c1, c2, c3)
+        s.step(1)
+        seen = []
+
+        def f(arbiter, out, tag=None):
+            a, b = arbiter.shapes
+            out.append(([c1, c2, c3].index(a), [c1, c2, c3].index(b), tag))
+
+        for body in (b1, b2, b3):
+            body.each_arbiter(f, seen, tag="x")
+        results.append(seen)
+    assert results[0] == results[1]
+    assert results[0][0][:2] == (0, 1)
