@@ -266,6 +266,9 @@ class PillowDrawing:
         return (x * k, y * k)
 
     def _transform_values(self):
+        stored = getattr(self, "_transform", None)
+        if isinstance(stored, tuple) and len(stored) == 6:
+            return stored  # tamias2d's options keep the six floats directly
         t = self.transform
         return (t.a, t.b, t.c, t.d, t.tx, t.ty)
 
@@ -369,7 +372,16 @@ class PillowDrawing:
             pts = _clip_convex(pts, -pad, -pad, w + pad, h + pad)
             if len(pts) < 3:
                 return
-        self._draw.polygon(pts, fill=fill, outline=outline, width=self._lw())
+        lw = self._lw()
+        if lw == 1:
+            self._draw.polygon(pts, fill=fill, outline=outline)
+        else:
+            # Pillow strokes wide polygon outlines through a full-canvas mask;
+            # a closed wide line over the fill costs far less.
+            self._draw.polygon(pts, fill=fill)
+            if outline is not None:
+                self._draw.line(list(pts) + [pts[0], pts[1]], fill=outline, width=lw,
+                                joint="curve")
         self._dirty = True
 
     def _line(self, p, q, color, width):
@@ -565,7 +577,8 @@ class GifWriter:
                 f"frame size {image.size} differs from the first frame's {self.frames[0].size}"
             )
         rgb = image.convert("RGB")
-        self.frames.append(rgb.quantize(colors=255, dither=Image.Dither.NONE))
+        self.frames.append(rgb.quantize(colors=255, method=Image.Quantize.FASTOCTREE,
+                                        dither=Image.Dither.NONE))
 
     def save(self, path):
         """Write the frames to path as an animated GIF.
