@@ -10,6 +10,9 @@ chipmunk_version = "2.0.1-tamias2d"
 
 from . import errors
 from .body import Body
+from .shape import (Shape, Circle, Segment, Poly, ShapeFilter, PointQueryInfo,
+    SegmentQueryInfo, ShapeQueryInfo, moment_for_circle, moment_for_segment, moment_for_box,
+    moment_for_poly, area_for_circle, area_for_segment, area_for_poly, centroid_for_poly)
 from .space_debug_draw_options import SpaceDebugDrawOptions
 from .vector import Vec2d, BB, Transform
 from .arbiter import Arbiter
