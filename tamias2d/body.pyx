@@ -1075,7 +1075,8 @@ cdef class Body:
 
         The arbiters come in Chipmunk's order (the reverse of the solver
         order), each seen from this body (its first shape is on this body).
-        Do not keep an Arbiter after the call.
+        Do not keep an Arbiter after the call. An exception raised by
+        ``func`` stops the iteration and propagates.
 
         >>> import tamias2d
         >>> seen = []

@@ -928,3 +928,27 @@ def test_each_arbiter_like_pymunk():
         results.append(seen)
     assert results[0] == results[1]
     assert results[0][0][:2] == (0, 1)
+
+
+def test_each_arbiter_exception_propagates_and_restores_swapped():
+    Space, Circle, Segment, Poly = _space_modules()
+    s = Space()
+    b1, b2 = Body(1, 1), Body(1, 1)
+    c1, c2 = Circle(b1, 10), Circle(b2, 10)
+    s.add(b1, b2, c1, c2)
+    s.step(1)
+
+    def shapes_seen(body):
+        out = []
+        body.each_arbiter(lambda arb: out.append(arb.shapes))
+        return out
+
+    before = (shapes_seen(b1), shapes_seen(b2))
+    assert before == ([(c1, c2)], [(c2, c1)])
+
+    def boom(arb):
+        raise ValueError("stop")
+
+    with pytest.raises(ValueError):
+        b2.each_arbiter(boom)
+    assert (shapes_seen(b1), shapes_seen(b2)) == before
