@@ -851,3 +851,52 @@ def test_degenerate_poly_is_built_but_refuses_mass():
     with pytest.raises(errors.IllegalShape):
         p.unsafe_set_vertices([(0, 0), (1, 1)])
     assert len(p.get_vertices()) == 3
+
+
+# -- doctests (properties included: doctest's finder skips C getset descriptors) ---------------
+
+def _docstring_owners():
+    yield "tamias2d.shape", shape_mod
+    for name, obj in vars(shape_mod).items():
+        if name.startswith("__") or getattr(obj, "__module__", "tamias2d.shape") != "tamias2d.shape":
+            continue
+        if callable(obj) or isinstance(obj, type):
+            yield f"tamias2d.shape.{name}", obj
+        if isinstance(obj, type):
+            for attr, member in vars(obj).items():
+                if attr.startswith("__") and attr not in ("__getstate__", "__setstate__"):
+                    continue
+                yield f"tamias2d.shape.{name}.{attr}", member
+
+
+def test_doctests():
+    import doctest
+    parser = doctest.DocTestParser()
+    runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS)
+    n = 0
+    for name, obj in _docstring_owners():
+        doc = getattr(obj, "__doc__", None)
+        if not isinstance(doc, str) or ">>>" not in doc:
+            continue
+        runner.run(parser.get_doctest(doc, dict(vars(shape_mod)), name, None, 0))
+        n += 1
+    result = runner.summarize(verbose=False)
+    assert result.failed == 0
+    assert n > 50
+
+
+def test_every_public_name_has_a_doctest():
+    missing = []
+    for name in shape_mod.__all__:
+        obj = getattr(shape_mod, name)
+        if ">>>" not in (obj.__doc__ or ""):
+            missing.append(name)
+        if isinstance(obj, type):
+            for attr, member in vars(obj).items():
+                # NamedTuple fields are documented by the class docstring.
+                if (attr.startswith("_") or attr in getattr(obj, "_fields", ())
+                        or isinstance(member, (list, str))):
+                    continue
+                if ">>>" not in (getattr(member, "__doc__", None) or ""):
+                    missing.append(f"{name}.{attr}")
+    assert not missing, missing
