@@ -20,7 +20,7 @@ __docformat__ = "reStructuredText"
 
 _SCENE_HELP = {
     "pyramid": "a pyramid of boxes on a ground segment (default)",
-    "stack": "three towers of boxes, planks and a ball",
+    "stack": "five stacks of boxes settling on the ground",
     "rain": "circles raining into an open box",
     "drum": "a spinning kinematic drum with boxes and balls inside",
 }
@@ -66,7 +66,11 @@ def _count(minimum):
 
 
 def build_parser():
-    """The argument parser of ``python -m tamias2d``."""
+    """The argument parser of ``python -m tamias2d``.
+
+    >>> build_parser().parse_args(["demo", "--size", "320x240"]).size
+    (320, 240)
+    """
     parser = argparse.ArgumentParser(
         prog="tamias2d",
         description="tamias2d: a 2D rigid-body physics engine (a Cython port of "
@@ -79,15 +83,15 @@ def build_parser():
     demo = sub.add_parser(
         "demo",
         help="run a demo scene headless and draw it to a PNG",
-        description="Build a scene, step it without a window, print a summary "
-                    "and draw the final state to a PNG (and optionally an "
-                    "animated GIF). Pictures need Pillow: " + PILLOW_HINT + ".",
+        description="Build a scene, step it without a window, print a summary and draw\n"
+                    "the final state to a PNG (and optionally an animated GIF).\n"
+                    "Pictures need Pillow: " + PILLOW_HINT + ".",
         epilog="scenes:\n" + scenes,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     demo.add_argument("--scene", choices=list(_SCENE_HELP), default="pyramid",
                       help="which scene to run (default: pyramid)")
-    demo.add_argument("--steps", type=_count(0), default=600,
+    demo.add_argument("--steps", type=_count(0), default=600, metavar="N",
                       help="number of steps (default: 600)")
     demo.add_argument("--dt", type=_dt, default=1 / 60,
                       help="time step in seconds, e.g. 0.01 or 1/60 (default: 1/60)")
@@ -137,7 +141,14 @@ def _format_time(seconds):
 
 
 def run_demo(args, stdout=None, stderr=None):
-    """Run ``demo`` with parsed arguments; returns the exit status."""
+    """Run ``demo`` with parsed arguments; returns the exit status.
+
+    >>> import io
+    >>> args = build_parser().parse_args(["demo", "--steps", "2", "--quiet",
+    ...                                   "--out", os.devnull + "/x.png"])
+    >>> run_demo(args, stderr=io.StringIO())   # the folder /dev/null does not exist
+    2
+    """
     import importlib
 
     from . import demo
@@ -175,9 +186,8 @@ def run_demo(args, stdout=None, stderr=None):
         # GIF playback in real time (GIF stores hundredths of a second).
         duration = max(20, round(frame_every * args.dt * 100) * 10)
         frames = pillow_util.GifWriter(duration=duration)
-        frame_options = demo.make_draw_options((width, height), scene.view, engine, supersample=2)
-        if args.contacts:
-            frame_options.flags |= frame_options.DRAW_COLLISION_POINTS
+        frame_options = demo.make_draw_options((width, height), scene.view, engine,
+                                               supersample=2, contacts=args.contacts)
 
     def on_frame(scene, i):
         frames.add(demo.render(scene, frame_options, _caption(args, scene, i)))
@@ -190,9 +200,8 @@ def run_demo(args, stdout=None, stderr=None):
 
     written = []
     if have_pillow:
-        options = demo.make_draw_options((width, height), scene.view, engine, supersample=3)
-        if args.contacts:
-            options.flags |= options.DRAW_COLLISION_POINTS
+        options = demo.make_draw_options((width, height), scene.view, engine,
+                                         supersample=3, contacts=args.contacts)
         image = demo.render(scene, options, _caption(args, scene, result.steps))
         image.save(args.out)
         written.append(f"{args.out} ({width}x{height})")

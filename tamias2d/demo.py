@@ -57,6 +57,10 @@ class Scene:
     :ivar view: the world box (left, bottom, right, top) to draw.
     :ivar before_step: None, or a function ``f(scene, i)`` called before
         step i (0-based); scenes that add bodies over time use it.
+
+    >>> import pymunk
+    >>> Scene("empty", "nothing", pymunk.Space(), (0, 0, 1, 1)).view
+    (0, 0, 1, 1)
     """
 
     def __init__(self, name, description, space, view, before_step=None):
@@ -102,7 +106,11 @@ def _static_segments(engine, space, points, radius, friction=1.0, elasticity=0.0
 
 
 def build_pyramid(engine=None, rows=10, steps=600):
-    """A pyramid of boxes (``rows`` on the ground row) on a ground segment."""
+    """A pyramid of boxes (``rows`` on the ground row) on a ground segment.
+
+    >>> len(build_pyramid(rows=3).space.bodies)
+    6
+    """
     engine = engine or _default_engine()
     space = engine.Space()
     space.gravity = (0, -900)
@@ -128,6 +136,9 @@ def build_stack(engine=None, heights=(8, 10, 12, 10, 8), steps=600):
 
     The solver gets 30 iterations: with Chipmunk's default of 10, tall
     stacks creep sideways and fall at a 1/60 s step.
+
+    >>> len(build_stack(heights=(2, 3)).space.bodies)
+    5
     """
     engine = engine or _default_engine()
     space = engine.Space()
@@ -159,6 +170,12 @@ def build_rain(engine=None, count=None, steps=600, seed=2024):
     One circle is added every other step until ``count`` (by default half the
     steps, at most 400) are in; positions, sizes and colours come from a
     seeded generator, so a run is repeatable.
+
+    >>> scene = build_rain(count=3)
+    >>> for i in range(6):
+    ...     scene.before_step(scene, i)
+    >>> len(scene.space.bodies)
+    3
     """
     engine = engine or _default_engine()
     if count is None:
@@ -190,7 +207,11 @@ def build_rain(engine=None, count=None, steps=600, seed=2024):
 
 def build_drum(engine=None, boxes=60, steps=600, seed=7):
     """A kinematic drum (a ring of segments with paddles) spinning with
-    boxes and balls tumbling inside."""
+    boxes and balls tumbling inside.
+
+    >>> len(build_drum(boxes=6).space.bodies)   # the drum, 6 boxes, 2 balls
+    9
+    """
     engine = engine or _default_engine()
     space = engine.Space()
     space.gravity = (0, -900)
@@ -332,6 +353,9 @@ class Result:
     :ivar step_time: seconds spent inside ``Space.step`` (wall clock).
     :ivar kinetic_energy: kinetic energy at the end (see :func:`kinetic_energy`).
     :ivar frames: number of GIF frames collected.
+
+    >>> Result(10, 0.01, 0.002, 0.0).steps
+    10
     """
 
     def __init__(self, steps, dt, step_time, kinetic_energy, frames=0):
@@ -350,6 +374,12 @@ def run(scene, steps=600, dt=1 / 60, progress=None, on_frame=None, frame_every=0
         the first step and after every ``frame_every``-th step (and after the
         last one), to collect animation frames.
     :returns: a :class:`Result`.
+
+    >>> seen = []
+    >>> r = run(build_scene("rain"), steps=6, on_frame=lambda s, i: seen.append(i),
+    ...         frame_every=4)
+    >>> seen, r.frames
+    ([0, 4, 6], 3)
     """
     space = scene.space
     step = space.step
@@ -376,9 +406,14 @@ def run(scene, steps=600, dt=1 / 60, progress=None, on_frame=None, frame_every=0
     return Result(steps, dt, spent, kinetic_energy(space), frames)
 
 
-def make_draw_options(size, view, engine=None, supersample=3):
+def make_draw_options(size, view, engine=None, supersample=3, contacts=False):
     """Pillow draw options for a scene's view; works with tamias2d and, for
-    comparison, with pymunk's Space.debug_draw."""
+    comparison, with pymunk's Space.debug_draw. ``contacts`` adds the
+    contact points, drawn wide enough to see.
+
+    >>> make_draw_options((80, 60), (0, 0, 8, 6)).to_image((4, 3))
+    (40.0, 30.0)
+    """
     from . import pillow_util
 
     options_class = pillow_util.DrawOptions
@@ -386,14 +421,22 @@ def make_draw_options(size, view, engine=None, supersample=3):
         # pymunk's Space.debug_draw needs pymunk's own options base class.
         options_class = type("DrawOptions", (pillow_util.PillowDrawing, engine.SpaceDebugDrawOptions), {})
     options = options_class(size, bb=view, margin=16, background=BACKGROUND,
-                            supersample=supersample, line_width=1.0)
+                            supersample=supersample, line_width=1.0,
+                            segment_width=2.5 if contacts else 1.0)
     options.flags = options.DRAW_SHAPES | options.DRAW_CONSTRAINTS
+    if contacts:
+        options.flags |= options.DRAW_COLLISION_POINTS
     options.shape_outline_color = OUTLINE
     return options
 
 
 def render(scene, options, caption=None):
-    """Draw the scene's space into the options' image; returns the image."""
+    """Draw the scene's space into the options' image; returns the image.
+
+    >>> scene = build_scene("pyramid")
+    >>> render(scene, make_draw_options((80, 60), scene.view)).size
+    (80, 60)
+    """
     options.clear()
     scene.space.debug_draw(options)
     image = options.image

@@ -193,11 +193,17 @@ class PillowDrawing:
     base class (:class:`DrawOptions` mixes it into tamias2d's; the demo can
     mix it into pymunk's to draw a pymunk space the same way). The
     parameters are those of :class:`DrawOptions`.
+
+    >>> import pymunk
+    >>> class PymunkDrawOptions(PillowDrawing, pymunk.SpaceDebugDrawOptions):
+    ...     pass
+    >>> PymunkDrawOptions((20, 10)).image.size
+    (20, 10)
     """
 
     def __init__(self, image_or_size=(640, 480), bb=None, *, positive_y_is_up=True,
                  background=(255, 255, 255, 255), margin=0, supersample=1,
-                 line_width=1.0):
+                 line_width=1.0, segment_width=None):
         super().__init__()
         if isinstance(image_or_size, Image.Image):
             target = image_or_size
@@ -222,6 +228,10 @@ class PillowDrawing:
         self.positive_y_is_up = bool(positive_y_is_up)
         self.background = SpaceDebugColor(*_rgba(background))
         self.line_width = float(line_width)
+        # Thin segments (constraints, contact points) may be drawn wider.
+        self.segment_width = self.line_width if segment_width is None else float(segment_width)
+        if not (self.segment_width > 0):
+            raise ValueError(f"segment_width must be positive, got {segment_width}")
         self.supersample = k
         self._target = target
         mode = "RGBA" if target.mode == "RGBA" else "RGB"
@@ -242,7 +252,11 @@ class PillowDrawing:
 
     @property
     def size(self):
-        """(width, height) of the output image in pixels."""
+        """(width, height) of the output image in pixels.
+
+        >>> DrawOptions((30, 20)).size
+        (30, 20)
+        """
         return self._target.size
 
     def fit(self, bb, margin=0):
@@ -313,6 +327,11 @@ class PillowDrawing:
         """The image drawn into (the one given, or the one made).
 
         With ``supersample`` > 1 reading this scales the drawing down into it.
+
+        >>> from PIL import Image
+        >>> picture = Image.new("RGB", (8, 8))
+        >>> DrawOptions(picture).image is picture
+        True
         """
         self._flush()
         return self._target
@@ -412,7 +431,14 @@ class PillowDrawing:
 
     def draw_circle(self, pos, angle, radius, outline_color, fill_color):
         """A filled, outlined circle with a line from the centre showing the
-        rotation angle."""
+        rotation angle.
+
+        >>> o = DrawOptions((20, 20))
+        >>> o.draw_circle((10, 10), 0.0, 6.0, SpaceDebugColor(0, 0, 0, 255),
+        ...               SpaceDebugColor(0, 0, 255, 255))
+        >>> o.image.getpixel((10, 13))
+        (0, 0, 255)
+        """
         cx, cy = self._canvas_point(pos)
         r = float(radius) * self.supersample
         angle = float(angle)
@@ -427,15 +453,29 @@ class PillowDrawing:
             self._line((cx, cy), self._canvas_point((ex, ey)), outline, self._lw())
 
     def draw_segment(self, a, b, color):
-        """A thin line."""
+        """A thin line.
+
+        >>> o = DrawOptions((20, 20))
+        >>> o.draw_segment((0, 10), (20, 10), SpaceDebugColor(255, 0, 0, 255))
+        >>> o.image.getpixel((5, 10))
+        (255, 0, 0)
+        """
         p = self._canvas_point(a)
         q = self._canvas_point(b)
         if not _finite(*p, *q):
             return
-        self._line(p, q, _rgba(color), self._lw())
+        width = max(1, int(round(self.segment_width * self.supersample)))
+        self._line(p, q, _rgba(color), width)
 
     def draw_fat_segment(self, a, b, radius, outline_color, fill_color):
-        """A segment with round caps of the given radius."""
+        """A segment with round caps of the given radius.
+
+        >>> o = DrawOptions((20, 20))
+        >>> o.draw_fat_segment((5, 10), (15, 10), 3.0, SpaceDebugColor(0, 0, 0, 255),
+        ...                    SpaceDebugColor(0, 255, 0, 255))
+        >>> o.image.getpixel((10, 9))
+        (0, 255, 0)
+        """
         p = self._canvas_point(a)
         q = self._canvas_point(b)
         r = abs(float(radius)) * self.supersample
@@ -467,7 +507,14 @@ class PillowDrawing:
 
     def draw_polygon(self, verts, radius, outline_color, fill_color):
         """A convex polygon; a positive radius rounds it (the Minkowski sum
-        with a disc, as the collision shape is)."""
+        with a disc, as the collision shape is).
+
+        >>> o = DrawOptions((20, 20))
+        >>> o.draw_polygon([(5, 5), (15, 5), (15, 15), (5, 15)], 2.0,
+        ...                SpaceDebugColor(0, 0, 0, 255), SpaceDebugColor(255, 0, 0, 255))
+        >>> o.image.getpixel((10, 10)), o.image.getpixel((10, 4))
+        ((255, 0, 0), (255, 0, 0))
+        """
         pts = [self._canvas_point(v) for v in verts]
         r = abs(float(radius)) * self.supersample
         if not pts or not all(_finite(*p) for p in pts) or not _finite(r):
@@ -509,7 +556,13 @@ class PillowDrawing:
 
     def draw_dot(self, size, pos, color):
         """A filled dot; size is in output pixels (the transform does not
-        scale it)."""
+        scale it).
+
+        >>> o = DrawOptions((20, 20))
+        >>> o.draw_dot(5.0, (10, 10), SpaceDebugColor(0, 0, 0, 255))
+        >>> o.image.getpixel((10, 10))
+        (0, 0, 0)
+        """
         cx, cy = self._canvas_point(pos)
         r = 0.5 * abs(float(size)) * self.supersample
         if not _finite(cx, cy, r):
@@ -532,7 +585,9 @@ class DrawOptions(PillowDrawing, SpaceDebugDrawOptions):
     :param margin: pixels kept free around ``bb``.
     :param supersample: draw at this many times the size and scale down,
         for smooth edges (1 draws directly).
-    :param line_width: width of outlines and thin lines, in output pixels.
+    :param line_width: width of outlines, in output pixels.
+    :param segment_width: width of thin segments (constraints, contact
+        points), in output pixels; line_width if not given.
 
     >>> options = DrawOptions((40, 30), bb=(0, 0, 4, 3))
     >>> options.draw_circle((20, 15), 0.0, 10.0, SpaceDebugColor(0, 0, 0, 255),
@@ -571,7 +626,14 @@ class GifWriter:
 
     def add(self, image):
         """Add a copy of the image as the next frame (stored with a palette,
-        so that many frames stay small in memory)."""
+        so that many frames stay small in memory).
+
+        >>> from PIL import Image
+        >>> gif = GifWriter()
+        >>> gif.add(Image.new("RGB", (4, 4), "red"))
+        >>> gif.frames[0].mode
+        'P'
+        """
         if self.frames and image.size != self.frames[0].size:
             raise ValueError(
                 f"frame size {image.size} differs from the first frame's {self.frames[0].size}"

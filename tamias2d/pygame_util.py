@@ -74,7 +74,10 @@ def from_pygame(p, surface):
 
 
 def get_mouse_pos(surface):
-    """The mouse position in physics coordinates (needs pygame)."""
+    """The mouse position in physics coordinates (needs pygame).
+
+    >>> x, y = get_mouse_pos(screen)  # doctest: +SKIP
+    """
     pygame = _pygame()
     return from_pygame(pygame.mouse.get_pos(), surface)
 
@@ -87,12 +90,12 @@ class DrawOptions(SpaceDebugDrawOptions):
     up. A shape's ``color`` attribute (for example a pygame.Color) sets its
     fill colour.
 
-    Typical use::
-
-        options = tamias2d.pygame_util.DrawOptions(screen)
-        space.debug_draw(options)
-
     :param surface: the pygame.Surface to draw on.
+
+    >>> import pygame, tamias2d                          # doctest: +SKIP
+    >>> screen = pygame.Surface((200, 100))              # doctest: +SKIP
+    >>> options = DrawOptions(screen)                    # doctest: +SKIP
+    >>> tamias2d.Space().debug_draw(options)             # doctest: +SKIP
     """
 
     def __init__(self, surface) -> None:
