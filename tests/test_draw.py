@@ -17,27 +17,10 @@ import tamias2d
 from tamias2d import pygame_util
 from tamias2d.space_debug_draw_options import SpaceDebugColor, SpaceDebugDrawOptions
 
-PIL = pytest.importorskip("PIL", reason="Pillow is needed for the Pillow drawer tests")
+pytest.importorskip("PIL", reason="Pillow (in the test extra) is needed for the drawer tests")
 from PIL import Image  # noqa: E402
 
 from tamias2d import pillow_util  # noqa: E402
-
-# What the scenes and drawing need of the engine; until the modules behind
-# them are built and exported, the tests that step a tamias2d space skip.
-_NEEDED = ["Space", "Body", "Circle", "Segment", "Poly", "moment_for_box", "moment_for_circle"]
-_MISSING = [n for n in _NEEDED if not hasattr(tamias2d, n)]
-if not _MISSING and not hasattr(tamias2d.Space, "debug_draw"):
-    _MISSING.append("Space.debug_draw")
-HAVE_SPACE = not _MISSING
-needs_space = pytest.mark.skipif(
-    not HAVE_SPACE, reason="tamias2d has no " + ", ".join(_MISSING) + " yet")
-
-try:
-    from tamias2d.vector import Transform as _Transform  # noqa: F401
-    HAVE_VECTOR = True
-except ImportError:
-    HAVE_VECTOR = False
-needs_vector = pytest.mark.skipif(not HAVE_VECTOR, reason="tamias2d.vector is not built yet")
 
 
 def f32(x):
@@ -146,7 +129,6 @@ def test_flags_rejects_like_pymunk(bad, error):
     assert ours.flags == 7
 
 
-@needs_vector
 def test_transform_default_and_set():
     ours, ref = SpaceDebugDrawOptions(), pymunk.SpaceDebugDrawOptions()
     assert tuple(ours.transform) == tuple(ref.transform)
@@ -239,16 +221,6 @@ def test_color_for_shape_uses_options_colours_and_shape_color():
     assert isinstance(got, SpaceDebugColor)
 
 
-def _have_body_and_shapes():
-    try:
-        tamias2d.Body, tamias2d.Circle  # noqa: B018
-        tamias2d.Body(1, 1)
-        return True
-    except Exception:
-        return False
-
-
-@pytest.mark.skipif(not _have_body_and_shapes(), reason="tamias2d Body / Circle are not built yet")
 def test_color_for_shape_with_real_bodies():
     options, ref = SpaceDebugDrawOptions(), pymunk.SpaceDebugDrawOptions()
     for engine, opts in ((tamias2d, options), (pymunk, ref)):
@@ -267,7 +239,6 @@ def test_color_for_shape_with_real_bodies():
                         options.shape_static_color]
 
 
-@needs_space
 def test_color_for_shape_sleeping_body():
     for engine in (tamias2d, pymunk):
         space = engine.Space()
@@ -289,7 +260,6 @@ def test_color_for_shape_sleeping_body():
 # --- Space.debug_draw with the base options (printing) --------------------
 
 
-@needs_space
 def test_debug_draw_prints_like_pymunk(capsys):
     def scene(engine, options):
         space = engine.Space()
@@ -310,7 +280,6 @@ def test_debug_draw_prints_like_pymunk(capsys):
     assert ours == ref
 
 
-@needs_space
 def test_debug_draw_flags_select_what_is_drawn(capsys):
     space = tamias2d.Space()
     body = tamias2d.Body(1, 10)
@@ -542,7 +511,6 @@ def test_pillow_drawer_draws_a_pymunk_space():
     assert at((-50, 80)) == WHITE
 
 
-@needs_space
 def test_pillow_drawer_same_picture_as_with_pymunk():
     def scene(engine, options):
         space = engine.Space()
@@ -662,7 +630,5 @@ def test_doctests(module_name):
     import importlib
 
     module = importlib.import_module("tamias2d." + module_name)
-    if not HAVE_SPACE and module_name != "pygame_util":
-        pytest.skip("the examples use tamias2d.Space, which is not built yet")
     result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
     assert result.failed == 0, f"{result.failed} doctest(s) failed in {module_name}"
