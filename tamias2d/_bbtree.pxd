@@ -124,3 +124,10 @@ cdef inline void cpSpatialIndexSegmentQuery(cpSpatialIndex *index, void *obj, cp
 cdef inline void cpSpatialIndexReindexQuery(cpSpatialIndex *index, cpSpatialIndexQueryFunc func,
                                             void *data) noexcept nogil:
     index.klass.reindexQuery(index, func, data)
+
+# -- test support ------------------------------------------------------------------------
+# _spacehash installs its constructor here at import, so the test-only
+# _TestTree can run over a spatial hash without a cimport cycle.
+ctypedef cpSpatialIndex *(*TamiasTestHashFactory)(cpFloat celldim, int cells,
+        cpSpatialIndexBBFunc bbfunc, cpSpatialIndex *staticIndex) noexcept nogil
+cdef void _tamias_set_test_hash_factory(TamiasTestHashFactory factory) noexcept nogil

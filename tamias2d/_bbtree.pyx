@@ -888,6 +888,14 @@ cdef void cpBBTreeOptimize(cpSpatialIndex *index) noexcept nogil:
 
 
 # -- test-only wrapper -----------------------------------------------------------------------------
+cdef TamiasTestHashFactory _test_hash_factory = NULL
+
+
+cdef void _tamias_set_test_hash_factory(TamiasTestHashFactory factory) noexcept nogil:
+    global _test_hash_factory
+    _test_hash_factory = factory
+
+
 cdef struct TestObj:
     long id
     cpBB bb
@@ -962,11 +970,21 @@ cdef class _TestTree:
     cdef cpHashValue hash_counter
     cdef uint32_t counter
 
-    def __cinit__(self, int capacity=4096, bint fatten=True):
+    def __cinit__(self, int capacity=4096, bint fatten=True, spatial_hash=None):
+        cdef double dim
+        cdef int cells
         self.objs = <TestObj *>cpcalloc(capacity, sizeof(TestObj))
-        self.static_index = cpBBTreeNew(_test_bb, NULL)
-        if self.static_index != NULL:
-            self.dynamic_index = cpBBTreeNew(_test_bb, self.static_index)
+        if spatial_hash is not None:
+            # Two spatial hashes, as Space.use_spatial_hash(dim, count) makes.
+            import tamias2d._spacehash      # installs the factory
+            dim, cells = spatial_hash
+            self.static_index = _test_hash_factory(dim, cells, _test_bb, NULL)
+            if self.static_index != NULL:
+                self.dynamic_index = _test_hash_factory(dim, cells, _test_bb, self.static_index)
+        else:
+            self.static_index = cpBBTreeNew(_test_bb, NULL)
+            if self.static_index != NULL:
+                self.dynamic_index = cpBBTreeNew(_test_bb, self.static_index)
         if self.objs == NULL or self.static_index == NULL or self.dynamic_index == NULL:
             cpTakeOutOfMemory()
             raise MemoryError("could not create the trees")
@@ -986,6 +1004,12 @@ cdef class _TestTree:
 
     cdef cpSpatialIndex *_index(self, bint static):
         return self.static_index if static else self.dynamic_index
+
+    cdef cpBBTree *_tree(self, bint static) except NULL:
+        cdef cpSpatialIndex *index = self._index(static)
+        if index.klass != &klass:
+            raise TypeError("this test index is a spatial hash, not a tree")
+        return <cpBBTree *>index
 
     def _check_oom(self):
         if cpTakeOutOfMemory():
@@ -1107,13 +1131,13 @@ cdef class _TestTree:
         return log
 
     def optimize(self, bint static=False):
-        cpBBTreeOptimize(self._index(static))
+        cpBBTreeOptimize(<cpSpatialIndex *>self._tree(static))
         self._check_oom()
 
     def leaf_bb(self, long oid):
         """The (fattened) box stored in the object's leaf."""
         cdef TestObj *o = self._obj(oid)
-        cdef cpBBTree *tree = <cpBBTree *>self._index(o.where == 2)
+        cdef cpBBTree *tree = self._tree(o.where == 2)
         cdef Node *leaf = <Node *>cpHashSetFind(tree.leaves, o.hashid, o)
         if leaf == NULL:
             return None
@@ -1122,7 +1146,7 @@ cdef class _TestTree:
     def pairs(self, long oid):
         """The object's cached pairs, head first: [(a, b, id), ...]."""
         cdef TestObj *o = self._obj(oid)
-        cdef cpBBTree *tree = <cpBBTree *>self._index(o.where == 2)
+        cdef cpBBTree *tree = self._tree(o.where == 2)
         cdef Node *leaf = <Node *>cpHashSetFind(tree.leaves, o.hashid, o)
         cdef Pair *pair
         out = []
@@ -1136,18 +1160,18 @@ cdef class _TestTree:
 
     def structure(self, bint static=False):
         """The tree as nested tuples of object ids (A, B), or None when empty."""
-        return _structure((<cpBBTree *>self._index(static)).root)
+        return _structure(self._tree(static).root)
 
     def check(self, bint static=False):
         """Check parent links and that every internal box is the merge of its children."""
-        cdef cpBBTree *tree = <cpBBTree *>self._index(static)
+        cdef cpBBTree *tree = self._tree(static)
         if tree.root != NULL and tree.root.parent != NULL:
             raise AssertionError("root has a parent")
         return _check(tree.root)
 
     @property
     def stamp(self):
-        return (<cpBBTree *>self.dynamic_index).stamp
+        return self._tree(False).stamp
 
 
 cdef object _structure(Node *node):
