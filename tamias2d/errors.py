@@ -13,6 +13,7 @@ __all__ = [
     "UnsolvableCollision",
     "CollisionContactOverflow", "SameVertices", "CollisionError",
     "SpaceLocked", "AlreadyInSpace", "NotInSpace", "CallbackError",
+    "IllegalCollisionType",
     "HighIterWarning",
 ]
 
@@ -100,6 +101,11 @@ class AlreadyInSpace(Tamias2DError, ValueError, AssertionError):
 
 class NotInSpace(Tamias2DError, ValueError, AssertionError):
     """An object was removed from a space that does not hold it."""
+
+
+class IllegalCollisionType(Tamias2DError, ValueError, AssertionError):
+    """A collision type pair that cannot key a handler (a wildcard first and a
+    type second)."""
 
 
 class CallbackError(Tamias2DError, RuntimeError):

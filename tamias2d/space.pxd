@@ -64,7 +64,7 @@ cdef class Space:
     cdef dict _shapes            # Shape -> None
     cdef dict _constraints       # constraints (none can be added yet)
     cdef object _static_body     # the lazily created Python static body, or None
-    cdef dict _handlers          # key -> CollisionHandler (keeps the callbacks alive)
+    cdef readonly dict _handlers # key -> CollisionHandler (keeps the callbacks alive)
     cdef dict _post_step_callbacks
     cdef dict _add_later         # objects added while locked, insertion order
     cdef dict _remove_later      # objects removed while locked (run LIFO, as pymunk)

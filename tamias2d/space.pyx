@@ -55,7 +55,7 @@ from tamias2d.arbiter cimport (Arbiter, arbiter_wrap, cpArbiterInit, cpArbiterUp
     cpArbiterThreadForBody, cpArbiterNext)
 
 from tamias2d.errors import (IllegalBody, IllegalShape, SpaceLocked, AlreadyInSpace,
-    NotInSpace)
+    NotInSpace, IllegalCollisionType)
 
 
 # Contacts per 32 KiB contact buffer, as Munk2D computes CP_CONTACTS_BUFFER_SIZE.
@@ -1863,7 +1863,7 @@ cdef class Space:
         cdef cpCollisionType ta, tb
         cdef CollisionHandler ch
         if collision_type_a is None and collision_type_b is not None:
-            raise ValueError(
+            raise IllegalCollisionType(
                 "collision_type_a can not be None if collision_type_b is not None. "
                 "Please swap them.")
         key = (collision_type_a, collision_type_b)
