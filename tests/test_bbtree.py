@@ -513,9 +513,11 @@ def test_deep_traversal_stack_out_of_memory_is_flagged():
 class PymunkScene:
     """The same boxes as Poly shapes in a pymunk Space (kinematic or static bodies)."""
 
-    def __init__(self, pymunk):
+    def __init__(self, pymunk, spatial_hash=None):
         self.pm = pymunk
         self.space = pymunk.Space()
+        if spatial_hash is not None:
+            self.space.use_spatial_hash(*spatial_hash)
         self.shapes = []
         self.log = []
         self.space.on_collision(None, None, pre_solve=self._pre_solve)
@@ -539,10 +541,20 @@ class PymunkScene:
 
 @pytest.mark.parametrize("seed", range(6))
 def test_same_order_as_pymunk(seed):
+    run_pymunk_comparison(seed, None)
+
+
+@pytest.mark.parametrize("seed,spatial_hash", [(0, (5.0, 100)), (1, (2.0, 1000)),
+                                                (2, (13.0, 7)), (3, (1.0, 50))])
+def test_spatial_hash_same_order_as_pymunk(seed, spatial_hash):
+    run_pymunk_comparison(seed, spatial_hash)
+
+
+def run_pymunk_comparison(seed, spatial_hash):
     pymunk = pytest.importorskip("pymunk")
     rng = random.Random(1000 + seed)
-    scene = PymunkScene(pymunk)
-    t = _TestTree()
+    scene = PymunkScene(pymunk, spatial_hash)
+    t = _TestTree(spatial_hash=spatial_hash)
     base = {}        # oid -> local box (vertices), body offset applies on top
     offset = {}      # oid -> current body position
     static = {}
@@ -621,3 +633,87 @@ def test_same_order_as_pymunk(seed):
                     t.set_bb(o, world(o))      # the step caches dynamic boxes
             mine = [(a, b) for a, b, _ in t.reindex_query() if overlap(world(a), world(b))]
             assert mine == scene.log, f"collision order differs at step {step}"
+
+
+# -- spatial hash -------------------------------------------------------------------------------
+M64 = 2**64 - 1
+
+
+def floor_int(f):
+    i = int(f)
+    return i - 1 if (f < 0.0 and f != i) else i
+
+
+def cells_of(bb, dim, n):
+    """The table buckets an object's box covers (cpSpaceHash's hash_func)."""
+    l, r = floor_int(bb[0] / dim), floor_int(bb[2] / dim)
+    b, t = floor_int(bb[1] / dim), floor_int(bb[3] / dim)
+    out = set()
+    for i in range(l, r + 1):
+        for j in range(b, t + 1):
+            out.add((((i & M64) * 1640531513 & M64) ^ ((j & M64) * 2654435789 & M64)) % n)
+    return out
+
+
+@pytest.mark.parametrize("seed,dim,cells", [(0, 5.0, 97), (1, 2.0, 13), (2, 10.0, 1000), (3, 1.0, 5)])
+def test_spatial_hash_reports_each_pair_sharing_a_bucket_once(seed, dim, cells):
+    rng = random.Random(500 + seed)
+    t = _TestTree(spatial_hash=(dim, cells))
+    n = _containers._next_prime(cells)
+    live, boxes = {}, {}
+    for step in range(80):
+        r = rng.random()
+        if r < 0.3 or len(live) < 4:
+            static = rng.random() < 0.3
+            bb = random_box(rng, 50.0)
+            oid = t.add(bb, static=static)
+            live[oid], boxes[oid] = (2 if static else 1), bb
+        elif r < 0.4:
+            oid = rng.choice(sorted(live))
+            t.remove(oid)
+            del live[oid]
+        else:
+            for oid in [o for o in live if live[o] == 1]:
+                l, b, rr, tt = boxes[oid]
+                dx, dy = rng.uniform(-2, 2), rng.uniform(-2, 2)
+                boxes[oid] = (l + dx, b + dy, rr + dx, tt + dy)
+                t.set_bb(oid, boxes[oid])
+            log = t.reindex_query()
+            reported = [frozenset((a, b)) for a, b, _ in log]
+            assert len(reported) == len(set(reported))
+            cells_by = {o: cells_of(boxes[o], dim, n) for o in live}
+            dyn = [o for o in live if live[o] == 1]
+            expected = set()
+            for i, a in enumerate(dyn):
+                for o in dyn[i + 1:] + [s for s in live if live[s] == 2]:
+                    if cells_by[a] & cells_by[o]:
+                        expected.add(frozenset((a, o)))
+            assert set(reported) == expected, f"step {step}"
+            assert all(e[2] == 0 for e in log)         # the hash caches no ids
+        assert t.count(False) + t.count(True) == len(live)
+
+
+def test_spatial_hash_queries():
+    t = _TestTree(spatial_hash=(4.0, 100))
+    a = t.add((0, 0, 1, 1))
+    b = t.add((10, 10, 11, 11))
+    s = t.add((0.5, 0.5, 3, 3), static=True)
+    assert sorted(t.query((0, 0, 2, 2))) == [a, s]
+    assert t.query((20, 20, 21, 21)) == []
+    assert set(t.segment_query((-1, 0.5), (12, 0.5))) == {a, s}
+    assert t.contains(a) and t.contains(s, static=True) and not t.contains(s)
+    t.remove(a)
+    assert t.query((0, 0, 2, 2)) == [s]          # the orphaned handle is skipped
+    assert t.count() == 1
+    t.reindex_object(b)
+    t.reindex(True)
+    assert t.query((10, 10, 10.5, 10.5)) == [b]
+    with pytest.raises(TypeError):
+        t.structure()
+
+
+def test_spatial_hash_degenerate_segment_ends():
+    t = _TestTree(spatial_hash=(1.0, 50))
+    t.add((0, 0, 1, 1))
+    assert t.segment_query((0.5, 0.5), (0.5, 0.5)) == [0]
+    assert t.segment_query((5.5, 5.5), (5.5, 5.5)) == []
