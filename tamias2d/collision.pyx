@@ -67,14 +67,6 @@ cdef extern from *:
     int tamias_collision_gjk_iter
     int tamias_collision_epa_iter
 
-# Iteration caps. They are Munk2D's constants; the test suite lowers them
-# through _set_iteration_limits() to reach the warning and limit paths with
-# small shapes (see that function).
-cdef int max_gjk_iterations = MAX_GJK_ITERATIONS
-cdef int max_epa_iterations = MAX_EPA_ITERATIONS
-cdef int warn_gjk_iterations = WARN_GJK_ITERATIONS
-cdef int warn_epa_iterations = WARN_EPA_ITERATIONS
-
 cdef inline void flag_gjk(int iteration) noexcept nogil:
     global tamias_collision_flags, tamias_collision_gjk_iter
     tamias_collision_flags |= CP_COLLISION_FLAG_GJK_WARN
@@ -352,7 +344,7 @@ cdef ClosestPoints EPARecurse(const SupportContext *ctx, int count, const Minkow
         # Usually the search ends on a point already in the hull; ids are a
         # cheap way to notice.
         duplicate = p.id == v0.id or p.id == v1.id
-        if not duplicate and cpCheckPointGreater(v0.ab, v1.ab, p.ab) and iteration < max_epa_iterations:
+        if not duplicate and cpCheckPointGreater(v0.ab, v1.ab, p.ab) and iteration < MAX_EPA_ITERATIONS:
             # Rebuild the convex hull starting from p.
             count2 = 1
             hull2[0] = p
@@ -371,7 +363,7 @@ cdef ClosestPoints EPARecurse(const SupportContext *ctx, int count, const Minkow
             iteration += 1
         else:
             # No point beyond it: this edge is the closest one of the difference.
-            if not (iteration < warn_epa_iterations):
+            if not (iteration < WARN_EPA_ITERATIONS):
                 flag_epa(iteration)
             return ClosestPointsNew(v0, v1)
 
@@ -395,8 +387,8 @@ cdef ClosestPoints GJKRecurse(const SupportContext *ctx, MinkowskiPoint v0, Mink
     cdef cpVect n
     cdef cpVect zero = cpv(0.0, 0.0)
     while True:
-        if iteration > max_gjk_iterations:
-            if not (iteration < warn_gjk_iterations):
+        if iteration > MAX_GJK_ITERATIONS:
+            if not (iteration < WARN_GJK_ITERATIONS):
                 flag_gjk(iteration)
             return ClosestPointsNew(v0, v1)
         if cpCheckPointGreater(v1.ab, v0.ab, zero):
@@ -413,12 +405,12 @@ cdef ClosestPoints GJKRecurse(const SupportContext *ctx, MinkowskiPoint v0, Mink
         p = Support(ctx, n)
         if cpCheckPointGreater(p.ab, v0.ab, zero) and cpCheckPointGreater(v1.ab, p.ab, zero):
             # The triangle v0, p, v1 holds the origin: the shapes overlap.
-            if not (iteration < warn_gjk_iterations):
+            if not (iteration < WARN_GJK_ITERATIONS):
                 flag_gjk(iteration)
             return EPA(ctx, v0, p, v1)
         if cpCheckAxis(v0.ab, v1.ab, p.ab, n):
             # p is no closer than the edge we have: that edge is the answer.
-            if not (iteration < warn_gjk_iterations):
+            if not (iteration < WARN_GJK_ITERATIONS):
                 flag_gjk(iteration)
             return ClosestPointsNew(v0, v1)
         # Keep p and the old point whose edge with p is nearer the origin.
@@ -758,6 +750,11 @@ def shapes_collide(shape_a, shape_b):
     bodies. The normal points from shape_a towards shape_b; each point's
     distance is negative when the shapes overlap.
 
+    As in Munk2D and pymunk, when shape_a's type sorts after shape_b's
+    (circle < segment < polygon), e.g. a polygon against a circle, each
+    point's distance comes out with the opposite sign (the pair is swapped to
+    collide it and only the normal is turned back).
+
     When the shapes do not touch, the set has no points. (pymunk 7.3 raises
     AssertionError with "This is likely a bug in Pymunk" in that case; the
     normal and points of touching shapes are the same as pymunk's, bit for
@@ -959,26 +956,6 @@ def _collision_table_call(shape_a, shape_b):
         CollisionFuncs[<unsigned int>a.klass.type + <unsigned int>b.klass.type * CP_NUM_SHAPES](a, b, &info)
     collision_check_flags()
     return info.count
-
-
-def _set_iteration_limits(max_gjk=MAX_GJK_ITERATIONS, max_epa=MAX_EPA_ITERATIONS,
-                          warn_gjk=WARN_GJK_ITERATIONS, warn_epa=WARN_EPA_ITERATIONS):
-    """Set the GJK/EPA iteration caps and warning levels (test-only; called
-    without arguments it restores Munk2D's 30/30/20/20). Returns the old
-    values.
-
-    >>> _set_iteration_limits()
-    (30, 30, 20, 20)
-    """
-    global max_gjk_iterations, max_epa_iterations, warn_gjk_iterations, warn_epa_iterations
-    old = (max_gjk_iterations, max_epa_iterations, warn_gjk_iterations, warn_epa_iterations)
-    if not (1 <= max_gjk and 1 <= max_epa and max_epa <= EPA_HULL_CAPACITY - 4):
-        raise ValueError("iteration limits out of range")
-    max_gjk_iterations = max_gjk
-    max_epa_iterations = max_epa
-    warn_gjk_iterations = warn_gjk
-    warn_epa_iterations = warn_epa
-    return old
 
 
 def _collide_loop(pairs, long rounds):
