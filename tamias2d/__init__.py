@@ -15,5 +15,6 @@ from .shape import (Shape, Circle, Segment, Poly, ShapeFilter, PointQueryInfo,
     moment_for_poly, area_for_circle, area_for_segment, area_for_poly, centroid_for_poly)
 from .space_debug_draw_options import SpaceDebugDrawOptions
 from .vector import Vec2d, BB, Transform
+from .collision import ContactPoint, ContactPointSet
 from .arbiter import Arbiter
 from .space import Space, empty_callback
