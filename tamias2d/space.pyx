@@ -41,6 +41,7 @@ from tamias2d._containers cimport (cpcalloc, cpfree, cpArrayNew, cpArrayFree, cp
 from tamias2d._bbtree cimport (cpBBTreeNew, cpBBTreeSetVelocityFunc, cpBBTreeVelocityFunc,
     cpSpatialIndexFree, cpSpatialIndexEach, cpSpatialIndexInsert, cpSpatialIndexRemove,
     cpSpatialIndexReindex, cpSpatialIndexReindexObject, cpSpatialIndexReindexQuery)
+from tamias2d._spacehash cimport cpSpaceHashNew
 from tamias2d.vector cimport (cpVect, cpBB, cpTransform, cpv, cpvadd, cpvsub, cpvmult,
     cpvlengthsq, cpvdist, cpBBIntersects, cpTransformPoint, vec2d_from_cpv,
     cpv_from_object, cpv_from_object_finite, cptransform_from_object)
@@ -430,6 +431,29 @@ cdef void cpSpaceReindexShapesForBody(cpSpace *space, cpBody *body) noexcept nog
     while shape != NULL:
         cpSpaceReindexShape(space, shape)
         shape = shape.next
+
+
+cdef void copyShapes(void *obj, void *data) noexcept nogil:
+    cdef cpShape *shape = <cpShape *>obj
+    cpSpatialIndexInsert(<cpSpatialIndex *>data, shape, shape.hashid)
+
+# Replaces both trees with spatial hashes. Returns 0 (and changes nothing)
+# when the hashes cannot be made.
+cdef cpBool cpSpaceUseSpatialHash(cpSpace *space, cpFloat dim, int count) noexcept nogil:
+    cdef cpSpatialIndex *staticShapes = cpSpaceHashNew(dim, count, _shapeGetBB, NULL)
+    if staticShapes == NULL:
+        return 0
+    cdef cpSpatialIndex *dynamicShapes = cpSpaceHashNew(dim, count, _shapeGetBB, staticShapes)
+    if dynamicShapes == NULL:
+        cpSpatialIndexFree(staticShapes)
+        return 0
+    cpSpatialIndexEach(space.staticShapes, copyShapes, staticShapes)
+    cpSpatialIndexEach(space.dynamicShapes, copyShapes, dynamicShapes)
+    cpSpatialIndexFree(space.staticShapes)
+    cpSpatialIndexFree(space.dynamicShapes)
+    space.staticShapes = staticShapes
+    space.dynamicShapes = dynamicShapes
+    return 1
 
 
 # -- post-step callbacks and locking (cpSpaceStep.c) ------------------------------------------
@@ -1762,6 +1786,35 @@ cdef class Space:
             raise SpaceLocked("You cannot manually reindex objects while the space is locked. "
                               "Wait until the current query or step is complete.")
         cpSpaceReindexStatic(&self._space)
+
+    def use_spatial_hash(self, dim, count):
+        """Use a spatial hash instead of the default bounding box trees for
+        the broad phase.
+
+        ``dim`` is the cell size (about the size of a typical shape) and
+        ``count`` the minimum number of hash cells (about 10 times the number
+        of shapes). The hash can beat the trees when there are very many
+        shapes of one size; otherwise keep the trees.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> s.use_spatial_hash(20, 1000)
+        >>> s.step(0.01)
+        """
+        cdef double cdim = dim
+        cdef long ccount = count
+        if not (cdim > 0.0) or not isfinite(cdim):
+            raise ValueError("dim must be a finite number > 0")
+        if ccount <= 0 or ccount > 2147483647:
+            raise ValueError("count must be a positive integer")
+        if self._locked or cpSpaceIsLocked(&self._space):
+            raise SpaceLocked("use_spatial_hash cannot be called during a step or a query")
+        if not cpSpaceUseSpatialHash(&self._space, cdim, <int>ccount):
+            if cpTakeOutOfMemory():
+                raise MemoryError("not enough memory for the spatial hash")
+            raise ValueError(f"count {count} is too large for the spatial hash")
+        if cpTakeOutOfMemory():
+            raise MemoryError("the space ran out of memory while filling the spatial hash")
 
     # -- the step ----------------------------------------------------------------------------
 

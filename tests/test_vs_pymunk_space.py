@@ -53,25 +53,36 @@ def _first_difference(a, b):
         return f"body count {len(a)} (pymunk) != {len(b)} (tamias2d)"
     for k, (x, y) in enumerate(zip(a, b)):
         if x != y:
-            names = ("position", "angle", "velocity", "angular_velocity")
+            names = ("position", "angle", "velocity", "angular_velocity", "is_sleeping")
             what = [f"{n}: {u!r} != {v!r}" for n, u, v in zip(names, x, y) if u != v]
             return f"body {k}: " + "; ".join(what)
     return None
 
 
-def run_side_by_side(name, build, dt, steps):
+def _state_sleeping(space):
+    return [(b.position, b.angle, b.velocity, b.angular_velocity, b.is_sleeping)
+            for b in space.bodies]
+
+
+def run_side_by_side(name, build, dt, steps, setup=None, poke=None, state=_state):
     sp = build(pymunk)
     st = build(T)
+    if setup is not None:
+        setup(sp)
+        setup(st)
     hp = getattr(sp, "scene_hook", None)
     ht = getattr(st, "scene_hook", None)
-    assert _state(sp) == _state(st), f"{name}: the scenes differ before the first step"
+    assert state(sp) == state(st), f"{name}: the scenes differ before the first step"
     for i in range(steps):
         if hp is not None:
             hp(i)
             ht(i)
+        if poke is not None:
+            poke(sp, i)
+            poke(st, i)
         sp.step(dt)
         st.step(dt)
-        diff = _first_difference(_state(sp), _state(st))
+        diff = _first_difference(state(sp), state(st))
         if diff is not None:
             pytest.fail(f"{name}: first difference after step {i + 1} (of {steps}): {diff}")
     return sp, st
@@ -81,6 +92,32 @@ def run_side_by_side(name, build, dt, steps):
 def test_scene_bitwise(name):
     sc = scenes.SCENES[name]
     run_side_by_side(name, sc.build, sc.dt, sc.steps)
+
+
+@pytest.mark.parametrize("name", ["rain_520", "add_remove", "drum"])
+def test_scene_bitwise_spatial_hash(name):
+    sc = scenes.SCENES[name]
+    run_side_by_side(name + "+spatial_hash", sc.build, sc.dt, sc.steps,
+                     setup=lambda s: s.use_spatial_hash(25.0, 5000))
+
+
+@pytest.mark.parametrize("name", ["circles_on_segment", "vertical_stack_10", "mixed",
+                                  "add_remove"])
+def test_scene_bitwise_sleeping(name):
+    # Sleeping on: components fall asleep, a poke at step 450 wakes one.
+    sc = scenes.SCENES[name]
+
+    def setup(space):
+        space.sleep_time_threshold = 0.3
+
+    def poke(space, i):
+        if i == 450:
+            bodies = list(space.bodies)
+            bodies[len(bodies) // 2].apply_impulse_at_local_point((40, 40))
+
+    sp, st = run_side_by_side(name + "+sleeping", sc.build, sc.dt, 900, setup=setup,
+                              poke=poke, state=_state_sleeping)
+    assert any(b.is_sleeping for b in st.bodies)
 
 
 def test_two_circles_golden():
