@@ -31,6 +31,9 @@ from cpython.tuple cimport PyTuple_Check, PyTuple_GET_SIZE, PyTuple_SET_ITEM
 from cpython.list cimport PyList_Check, PyList_GET_SIZE
 from cpython.float cimport PyFloat_CheckExact, PyFloat_AS_DOUBLE
 from cpython.long cimport PyLong_CheckExact
+from cpython.number cimport (PyNumber_Add, PyNumber_Subtract, PyNumber_Multiply,
+                             PyNumber_TrueDivide, PyNumber_FloorDivide, PyNumber_Negative,
+                             PyNumber_Positive, PyNumber_Power)
 from libc.math cimport sqrt, isfinite, isnan
 
 from tamias2d.errors import IllegalVector
@@ -98,6 +101,42 @@ cdef object _Transform = None
 
 
 # -- small helpers -----------------------------------------------------------
+# Python arithmetic on the stored items, through the C-API number protocol.
+# Cython's inlined fast paths for "object + object" and "object * object"
+# return an operand unchanged when the other is an int zero (or the float is
+# zero), which loses the sign of zero (0.0 * -3 gives 0.0, Python gives -0.0).
+# These calls are exactly what the interpreter does for the same expression.
+cdef object _TWO = 2
+
+cdef inline object _add(object a, object b):
+    return PyNumber_Add(a, b)
+
+cdef inline object _sub(object a, object b):
+    return PyNumber_Subtract(a, b)
+
+cdef inline object _mul(object a, object b):
+    return PyNumber_Multiply(a, b)
+
+cdef inline object _div(object a, object b):
+    return PyNumber_TrueDivide(a, b)
+
+cdef inline object _fdiv(object a, object b):
+    return PyNumber_FloorDivide(a, b)
+
+cdef inline object _neg(object a):
+    return PyNumber_Negative(a)
+
+cdef inline object _pos(object a):
+    return PyNumber_Positive(a)
+
+cdef inline object _sq(object a):
+    """``a ** 2`` as Python computes it (for floats: libm pow, not a * a)."""
+    return PyNumber_Power(a, _TWO, None)
+
+cdef inline object _len_sq(tuple t):
+    """``t[0] ** 2 + t[1] ** 2``."""
+    return PyNumber_Add(PyNumber_Power(t[0], _TWO, None), PyNumber_Power(t[1], _TWO, None))
+
 
 cdef inline object _vec(object x, object y):
     """A Vec2d holding the two objects as they are."""
@@ -124,10 +163,18 @@ cdef object _new_tuple(object cls, object base, tuple items):
     return o
 
 
+cdef str _safe_repr(object o):
+    """repr that does not call our own __repr__ (which would reject a tuple
+    subclass of the wrong size and recurse)."""
+    if PyTuple_Check(o) and type(o) is not tuple:
+        return type(o).__name__ + tuple.__repr__(o)
+    return repr(o)
+
+
 cdef inline tuple _self_items(object self, Py_ssize_t n, str name):
     """``self`` of a method, checked to be a tuple of ``n`` items."""
     if not PyTuple_Check(self) or PyTuple_GET_SIZE(self) != n:
-        raise TypeError(f"expected a {name} of {n} items, got {self!r}")
+        raise TypeError(f"expected a {name} of {n} items, got {_safe_repr(self)}")
     return <tuple>self
 
 
@@ -151,7 +198,7 @@ cdef tuple _seq_items(object o, Py_ssize_t n, str what):
                 raise TypeError(
                     f"{what} must be a sequence of {n} numbers, "
                     f"got an unindexable {type(o).__name__}") from e
-    raise IllegalVector(f"{what} must be a sequence of {n} numbers, got {m} items: {o!r}")
+    raise IllegalVector(f"{what} must be a sequence of {n} numbers, got {m} items: {_safe_repr(o)}")
 
 
 cdef inline tuple _pair(object o):
@@ -181,7 +228,7 @@ cdef double _component_slow(object item, object seq, str what) except? -1.0:
         return item
     except TypeError:
         raise TypeError(
-            f"{what} must hold numbers, got {type(item).__name__} in {seq!r}") from None
+            f"{what} must hold numbers, got {type(item).__name__} in {_safe_repr(seq)}") from None
 
 
 cdef inline double _component(object item, object seq, str what) except? -1.0:
@@ -212,9 +259,9 @@ cdef cpVect cpv_from_object_finite(object o, str what) except *:
     try:
         v = cpv_from_object(o)
     except IllegalVector:
-        raise IllegalVector(f"{what} must be a sequence of 2 numbers, got {o!r}") from None
+        raise IllegalVector(f"{what} must be a sequence of 2 numbers, got {_safe_repr(o)}") from None
     except TypeError:
-        raise TypeError(f"{what} must be a sequence of 2 numbers, got {o!r}") from None
+        raise TypeError(f"{what} must be a sequence of 2 numbers, got {_safe_repr(o)}") from None
     if not (isfinite(v.x) and isfinite(v.y)):
         raise IllegalVector(f"{what} must be finite, got ({v.x!r}, {v.y!r})")
     return v
@@ -355,7 +402,7 @@ class Vec2d(tuple):
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
         cdef tuple o = _pair(other)
-        return _vec(t[0] + o[0], t[1] + o[1])
+        return _vec(_add(t[0], o[0]), _add(t[1], o[1]))
 
     def __radd__(self, other):
         """Sum with a 2-sequence on the left.
@@ -366,7 +413,7 @@ class Vec2d(tuple):
         cdef tuple t = _self_items(self, 2, "Vec2d")
         cdef tuple o = _pair(other)
         # pymunk adds in the order self + other here too.
-        return _vec(t[0] + o[0], t[1] + o[1])
+        return _vec(_add(t[0], o[0]), _add(t[1], o[1]))
 
     def __sub__(self, other):
         """Item-wise difference with another vector or 2-sequence.
@@ -376,7 +423,7 @@ class Vec2d(tuple):
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
         cdef tuple o = _pair(other)
-        return _vec(t[0] - o[0], t[1] - o[1])
+        return _vec(_sub(t[0], o[0]), _sub(t[1], o[1]))
 
     def __rsub__(self, other):
         """Difference with a 2-sequence on the left.
@@ -386,7 +433,7 @@ class Vec2d(tuple):
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
         cdef tuple o = _pair(other)
-        return _vec(o[0] - t[0], o[1] - t[1])
+        return _vec(_sub(o[0], t[0]), _sub(o[1], t[1]))
 
     def __mul__(self, other):
         """Scale by a real number.
@@ -400,7 +447,7 @@ class Vec2d(tuple):
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
         _check_real(other)
-        return _vec(t[0] * other, t[1] * other)
+        return _vec(_mul(t[0], other), _mul(t[1], other))
 
     def __rmul__(self, other):
         """Scale by a real number on the left.
@@ -411,7 +458,7 @@ class Vec2d(tuple):
         cdef tuple t = _self_items(self, 2, "Vec2d")
         _check_real(other)
         # pymunk multiplies in the order self * other here too.
-        return _vec(t[0] * other, t[1] * other)
+        return _vec(_mul(t[0], other), _mul(t[1], other))
 
     def __floordiv__(self, other):
         """Floor division of both items by a real number.
@@ -421,7 +468,7 @@ class Vec2d(tuple):
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
         _check_real(other)
-        return _vec(t[0] // other, t[1] // other)
+        return _vec(_fdiv(t[0], other), _fdiv(t[1], other))
 
     def __truediv__(self, other):
         """Division of both items by a real number.
@@ -431,7 +478,7 @@ class Vec2d(tuple):
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
         _check_real(other)
-        return _vec(t[0] / other, t[1] / other)
+        return _vec(_div(t[0], other), _div(t[1], other))
 
     def __neg__(self):
         """Both items negated.
@@ -440,7 +487,7 @@ class Vec2d(tuple):
         Vec2d(-2, 0.5)
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
-        return _vec(-t[0], -t[1])
+        return _vec(_neg(t[0]), _neg(t[1]))
 
     def __pos__(self):
         """Unary plus applied to both items.
@@ -449,7 +496,7 @@ class Vec2d(tuple):
         Vec2d(2, -0.5)
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
-        return _vec(+t[0], +t[1])
+        return _vec(_pos(t[0]), _pos(t[1]))
 
     def __abs__(self):
         """The length of the vector.
@@ -458,7 +505,7 @@ class Vec2d(tuple):
         10.0
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
-        return _sqrt(t[0] ** 2 + t[1] ** 2)
+        return _sqrt(_len_sq(t))
 
     def __bool__(self):
         """False only for the zero vector.
@@ -478,7 +525,7 @@ class Vec2d(tuple):
         13
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
-        return t[0] ** 2 + t[1] ** 2
+        return _len_sq(t)
 
     def get_length_sqrd(self):
         """Deprecated spelling of :attr:`length_squared`.
@@ -494,7 +541,7 @@ class Vec2d(tuple):
         _warnings.warn("Vec2d.get_length_sqrd() is deprecated. Use Vec2d.length_squared instead.",
                        DeprecationWarning, stacklevel=1)
         cdef tuple t = _self_items(self, 2, "Vec2d")
-        return t[0] ** 2 + t[1] ** 2
+        return _len_sq(t)
 
     @property
     def length(self):
@@ -504,7 +551,7 @@ class Vec2d(tuple):
         13.0
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
-        return _sqrt(t[0] ** 2 + t[1] ** 2)
+        return _sqrt(_len_sq(t))
 
     def scale_to_length(self, length):
         """A copy pointing the same way with the given length; a zero vector
@@ -514,8 +561,8 @@ class Vec2d(tuple):
         Vec2d(0.0, 2.0)
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
-        old = _sqrt(t[0] ** 2 + t[1] ** 2)
-        return _vec(t[0] * length / old, t[1] * length / old)
+        old = _sqrt(_len_sq(t))
+        return _vec(_div(_mul(t[0], length), old), _div(_mul(t[1], length), old))
 
     def rotated(self, angle_radians):
         """A copy rotated counter-clockwise by ``angle_radians``.
@@ -527,7 +574,7 @@ class Vec2d(tuple):
         cdef tuple t = _self_items(self, 2, "Vec2d")
         c = _cos(angle_radians)
         s = _sin(angle_radians)
-        return _vec(t[0] * c - t[1] * s, t[0] * s + t[1] * c)
+        return _vec(_sub(_mul(t[0], c), _mul(t[1], s)), _add(_mul(t[0], s), _mul(t[1], c)))
 
     def rotated_degrees(self, angle_degrees):
         """A copy rotated counter-clockwise by ``angle_degrees``.
@@ -565,8 +612,8 @@ class Vec2d(tuple):
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
         cdef tuple o = _pair(other)
-        cross = t[0] * o[1] - t[1] * o[0]
-        dot = t[0] * o[0] + t[1] * o[1]
+        cross = _sub(_mul(t[0], o[1]), _mul(t[1], o[0]))
+        dot = _add(_mul(t[0], o[0]), _mul(t[1], o[1]))
         return _atan2(cross, dot)
 
     def get_angle_degrees_between(self, other):
@@ -587,9 +634,9 @@ class Vec2d(tuple):
         Vec2d(0.0, 0.0)
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
-        length = _sqrt(t[0] ** 2 + t[1] ** 2)
+        length = _sqrt(_len_sq(t))
         if length != 0:
-            return _vec(t[0] / length, t[1] / length)
+            return _vec(_div(t[0], length), _div(t[1], length))
         return _vec(0.0, 0.0)
 
     def normalized_and_length(self):
@@ -599,9 +646,9 @@ class Vec2d(tuple):
         (Vec2d(0.0, 1.0), 10.0)
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
-        length = _sqrt(t[0] ** 2 + t[1] ** 2)
+        length = _sqrt(_len_sq(t))
         if length != 0:
-            return _vec(t[0] / length, t[1] / length), length
+            return _vec(_div(t[0], length), _div(t[1], length)), length
         return _vec(0.0, 0.0), 0.0
 
     def perpendicular(self):
@@ -611,7 +658,7 @@ class Vec2d(tuple):
         Vec2d(-1, 3)
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
-        return _vec(-t[1], t[0])
+        return _vec(_neg(t[1]), t[0])
 
     def perpendicular_normal(self):
         """The unit vector 90 degrees counter-clockwise; the zero vector is
@@ -621,9 +668,9 @@ class Vec2d(tuple):
         Vec2d(-1.0, 0.0)
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
-        length = _sqrt(t[0] ** 2 + t[1] ** 2)
+        length = _sqrt(_len_sq(t))
         if length != 0:
-            return _vec(-t[1] / length, t[0] / length)
+            return _vec(_div(_neg(t[1]), length), _div(t[0], length))
         return _vec(t[0], t[1])
 
     # -- products and distances --------------------------------------------------
@@ -635,7 +682,7 @@ class Vec2d(tuple):
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
         cdef tuple o = _pair(other)
-        return float(t[0] * o[0] + t[1] * o[1])
+        return float(_add(_mul(t[0], o[0]), _mul(t[1], o[1])))
 
     def cross(self, other):
         """The z component of the 3D cross product, ``x*oy - y*ox``.
@@ -645,7 +692,7 @@ class Vec2d(tuple):
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
         cdef tuple o = _pair(other)
-        return t[0] * o[1] - t[1] * o[0]
+        return _sub(_mul(t[0], o[1]), _mul(t[1], o[0]))
 
     def get_distance(self, other):
         """The distance between the two points.
@@ -655,7 +702,7 @@ class Vec2d(tuple):
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
         cdef tuple o = _pair(other)
-        return _sqrt((t[0] - o[0]) ** 2 + (t[1] - o[1]) ** 2)
+        return _sqrt(_add(_sq(_sub(t[0], o[0])), _sq(_sub(t[1], o[1]))))
 
     def get_distance_squared(self, other):
         """The squared distance between the two points.
@@ -665,7 +712,7 @@ class Vec2d(tuple):
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
         cdef tuple o = _pair(other)
-        return (t[0] - o[0]) ** 2 + (t[1] - o[1]) ** 2
+        return _add(_sq(_sub(t[0], o[0])), _sq(_sub(t[1], o[1])))
 
     def get_dist_sqrd(self, other):
         """Deprecated spelling of :meth:`get_distance_squared`.
@@ -680,7 +727,7 @@ class Vec2d(tuple):
                        DeprecationWarning, stacklevel=1)
         cdef tuple t = _self_items(self, 2, "Vec2d")
         cdef tuple o = _pair(other)
-        return (t[0] - o[0]) ** 2 + (t[1] - o[1]) ** 2
+        return _add(_sq(_sub(t[0], o[0])), _sq(_sub(t[1], o[1])))
 
     def projection(self, other):
         """The projection of this vector on the line of ``other``; a zero
@@ -691,11 +738,11 @@ class Vec2d(tuple):
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
         cdef tuple o = _pair(other)
-        o_len_sq = o[0] * o[0] + o[1] * o[1]
+        o_len_sq = _add(_mul(o[0], o[0]), _mul(o[1], o[1]))
         if o_len_sq == 0.0:
             return _vec(0.0, 0.0)
-        scale = float(t[0] * o[0] + t[1] * o[1]) / o_len_sq
-        return _vec(o[0] * scale, o[1] * scale)
+        scale = _div(float(_add(_mul(t[0], o[0]), _mul(t[1], o[1]))), o_len_sq)
+        return _vec(_mul(o[0], scale), _mul(o[1], scale))
 
     def interpolate_to(self, other, range):
         """The point a fraction ``range`` of the way from here to ``other``.
@@ -705,7 +752,8 @@ class Vec2d(tuple):
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
         cdef tuple o = _pair(other)
-        return _vec(t[0] + (o[0] - t[0]) * range, t[1] + (o[1] - t[1]) * range)
+        return _vec(_add(t[0], _mul(_sub(o[0], t[0]), range)),
+                    _add(t[1], _mul(_sub(o[1], t[1]), range)))
 
     def convert_to_basis(self, x_vector, y_vector):
         """Coordinates in the basis ``(x_vector, y_vector)``, each found by
@@ -717,8 +765,8 @@ class Vec2d(tuple):
         cdef tuple t = _self_items(self, 2, "Vec2d")
         cdef tuple xv = _pair(x_vector)
         cdef tuple yv = _pair(y_vector)
-        x = float(t[0] * xv[0] + t[1] * xv[1]) / (xv[0] ** 2 + xv[1] ** 2)
-        y = float(t[0] * yv[0] + t[1] * yv[1]) / (yv[0] ** 2 + yv[1] ** 2)
+        x = _div(float(_add(_mul(t[0], xv[0]), _mul(t[1], xv[1]))), _len_sq(xv))
+        y = _div(float(_add(_mul(t[0], yv[0]), _mul(t[1], yv[1]))), _len_sq(yv))
         return _vec(x, y)
 
     @property
@@ -739,7 +787,7 @@ class Vec2d(tuple):
         True
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
-        return _sqrt(t[0] ** 2 + t[1] ** 2), _atan2(t[1], t[0])
+        return _sqrt(_len_sq(t)), _atan2(t[1], t[0])
 
     # -- constructors ------------------------------------------------------------
     @staticmethod
@@ -776,7 +824,7 @@ class Vec2d(tuple):
         >>> Vec2d.from_polar(3, 0)
         Vec2d(3.0, 0.0)
         """
-        return _vec(_cos(angle) * length, _sin(angle) * length)
+        return _vec(_mul(_cos(angle), length), _mul(_sin(angle), length))
 
     # -- complex-number style rotation (Chipmunk's cpvrotate / cpvunrotate) --------
     def cpvrotate(self, other):
@@ -787,7 +835,7 @@ class Vec2d(tuple):
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
         cdef tuple o = _pair(other)
-        return _vec(t[0] * o[0] - t[1] * o[1], t[0] * o[1] + t[1] * o[0])
+        return _vec(_sub(_mul(t[0], o[0]), _mul(t[1], o[1])), _add(_mul(t[0], o[1]), _mul(t[1], o[0])))
 
     def cpvunrotate(self, other):
         """Product with the conjugate of ``other``: undoes :meth:`cpvrotate`.
@@ -797,7 +845,7 @@ class Vec2d(tuple):
         """
         cdef tuple t = _self_items(self, 2, "Vec2d")
         cdef tuple o = _pair(other)
-        return _vec(t[0] * o[0] + t[1] * o[1], t[1] * o[0] - t[0] * o[1])
+        return _vec(_add(_mul(t[0], o[0]), _mul(t[1], o[1])), _sub(_mul(t[1], o[0]), _mul(t[0], o[1])))
 
 
 # -- BB -----------------------------------------------------------------------
@@ -1097,21 +1145,22 @@ class Transform(tuple):
         sa, sb, sc, sd, stx, sty = t
         if n == 2:
             x, y = other
-            return _vec(sa * x + sc * y + stx, sb * x + sd * y + sty)
+            return _vec(_add(_add(_mul(sa, x), _mul(sc, y)), stx),
+                        _add(_add(_mul(sb, x), _mul(sd, y)), sty))
         if n == 6:
             a, b, c, d, tx, ty = other
             # The "* 0" and "* 1" terms are kept: with inf or NaN entries they
             # change the result, and pymunk has them.
             return _new_tuple(_Transform, _Transform, (
-                sa * a + sc * b + stx * 0,
-                sb * a + sd * b + sty * 0,
-                sa * c + sc * d + stx * 0,
-                sb * c + sd * d + sty * 0,
-                sa * tx + sc * ty + stx * 1,
-                sb * tx + sd * ty + sty * 1,
+                _add(_add(_mul(sa, a), _mul(sc, b)), _mul(stx, 0)),
+                _add(_add(_mul(sb, a), _mul(sd, b)), _mul(sty, 0)),
+                _add(_add(_mul(sa, c), _mul(sc, d)), _mul(stx, 0)),
+                _add(_add(_mul(sb, c), _mul(sd, d)), _mul(sty, 0)),
+                _add(_add(_mul(sa, tx), _mul(sc, ty)), _mul(stx, 1)),
+                _add(_add(_mul(sb, tx), _mul(sd, ty)), _mul(sty, 1)),
             ))
         raise IllegalVector(
-            f"a Transform applies to a 2-sequence or a 6-sequence, got {n} items: {other!r}")
+            f"a Transform applies to a 2-sequence or a 6-sequence, got {n} items: {_safe_repr(other)}")
 
     @staticmethod
     def identity():
@@ -1159,16 +1208,16 @@ class Transform(tuple):
         """
         cdef tuple t = _self_items(self, 6, "Transform")
         a, b, c, d, tx, ty = t
-        det = a * d - b * c
+        det = _sub(_mul(a, d), _mul(b, c))
         if det == 0:
             raise ValueError("Singular transform cannot be inverted")
         return _new_tuple(_Transform, _Transform, (
-            d / det,
-            -b / det,
-            -c / det,
-            a / det,
-            (c * ty - d * tx) / det,
-            (b * tx - a * ty) / det,
+            _div(d, det),
+            _div(_neg(b), det),
+            _div(_neg(c), det),
+            _div(a, det),
+            _div(_sub(_mul(c, ty), _mul(d, tx)), det),
+            _div(_sub(_mul(b, tx), _mul(a, ty)), det),
         ))
 
     @staticmethod
@@ -1198,10 +1247,50 @@ class Transform(tuple):
         """
         c = _cos(t)
         s = _sin(t)
-        return _new_tuple(_Transform, _Transform, (c, s, -s, c, 0, 0))
+        return _new_tuple(_Transform, _Transform, (c, s, _neg(s), c, 0, 0))
 
 
 _Vec2d = Vec2d
 _vec2d_tp = <PyTypeObject *>Vec2d
 _BB = BB
 _Transform = Transform
+
+
+# -- hooks for the tests of the C boundary helpers (not part of the API) -------
+
+def _cpv_roundtrip(o):
+    """``vec2d_from_cpv(cpv_from_object(o))``.
+
+    >>> _cpv_roundtrip([1, 2.5])
+    Vec2d(1.0, 2.5)
+    """
+    return vec2d_from_cpv(cpv_from_object(o))
+
+
+def _cpv_finite_roundtrip(o, what):
+    """``vec2d_from_cpv(cpv_from_object_finite(o, what))``.
+
+    >>> _cpv_finite_roundtrip((1, float("nan")), "position")
+    Traceback (most recent call last):
+    ...
+    tamias2d.errors.IllegalVector: position must be finite, got (1.0, nan)
+    """
+    return vec2d_from_cpv(cpv_from_object_finite(o, what))
+
+
+def _cpbb_roundtrip(o):
+    """``bb_from_cpbb(cpbb_from_object(o))``.
+
+    >>> _cpbb_roundtrip([0, 1, 2, 3])
+    BB(left=0.0, bottom=1.0, right=2.0, top=3.0)
+    """
+    return bb_from_cpbb(cpbb_from_object(o))
+
+
+def _cptransform_roundtrip(o):
+    """``transform_from_cp(cptransform_from_object(o))``.
+
+    >>> _cptransform_roundtrip(Transform())
+    Transform(a=1.0, b=0.0, c=0.0, d=1.0, tx=0.0, ty=0.0)
+    """
+    return transform_from_cp(cptransform_from_object(o))

@@ -1,0 +1,123 @@
+"""pymunk's own unit tests, run against tamias2d.
+
+Every unit test file installed with pymunk runs (in a child process, with
+``pymunk`` aliased to tamias2d: see pymunk_compat.py). The tests listed in
+EXPECTED_TO_PASS must pass; the others are only counted, and the table of
+passed / failed / errors per file is printed at the end of the session.
+
+When a module lands, add the names of the pymunk tests it makes pass, one per
+line (``python tests/pymunk_compat.py test_body.py`` shows what passes).
+"""
+import pytest
+
+import pymunk_compat
+
+EXPECTED_TO_PASS = {
+    "test_bb.py": [
+        "UnitTestBB.testCreation",
+        "UnitTestBB.testMerge",
+        "UnitTestBB.testMethods",
+        "UnitTestBB.testPickle",
+    ],
+    "test_transform.py": [
+        "UnitTestTransform.testPickle",
+    ],
+    "test_vec2d.py": [
+        "UnitTestVec2d.testComparison",
+        "UnitTestVec2d.testCreationAndAccess",
+        "UnitTestVec2d.testLength",
+    ],
+}
+
+PYMUNK_TEST_FILES = pymunk_compat.pymunk_test_files()
+
+
+def test_expectations_name_real_tests():
+    """A typo in EXPECTED_TO_PASS must not pass silently."""
+    for filename, names in EXPECTED_TO_PASS.items():
+        assert filename in PYMUNK_TEST_FILES, f"pymunk has no tests/{filename}"
+        declared = set(pymunk_compat.declared_tests(filename))
+        unknown = [n for n in names if n not in declared]
+        assert not unknown, f"{filename} defines no test named {unknown}"
+        assert len(set(names)) == len(names), f"{filename}: a name is listed twice"
+
+
+@pytest.mark.parametrize("filename", PYMUNK_TEST_FILES)
+def test_pymunk_test_file(filename):
+    expected = EXPECTED_TO_PASS.get(filename, [])
+    # A file nobody expects to pass yet gets a shorter leash if it hangs.
+    result = pymunk_compat.run_test_file(filename, timeout=600 if expected else 120)
+    counts = result.counts()
+    print(f"{filename}: {counts['passed']} passed, {counts['failed']} failed, "
+          f"{counts['error']} errors, {counts['skipped']} skipped")
+    not_listed = [n for n in result.names("passed") if n not in expected]
+    if not_listed:
+        print(f"{filename}: passing but not in EXPECTED_TO_PASS: {not_listed}")
+    failing = [n for n in expected if result.outcome(n) != "passed"]
+    report = "\n\n".join(f"--- {n}: {result.outcome(n)}\n{result.detail(n)}" for n in failing)
+    assert not failing, (f"{len(failing)} pymunk test(s) of {filename} expected to pass "
+                         f"did not:\n{report}")
+
+
+# -- the runner itself ---------------------------------------------------------------
+
+FAKE_TESTS = '''
+import os, time, unittest
+import pymunk
+from pymunk.vec2d import Vec2d
+
+class T(unittest.TestCase):
+    def test_pass(self):
+        assert pymunk.Vec2d is Vec2d and type(Vec2d(1, 2)).__module__ == "tamias2d.vector"
+    def test_fail(self):
+        self.assertEqual(1, 2)
+    def test_error(self):
+        raise RuntimeError("boom")
+    def test_skip(self):
+        self.skipTest("why not")
+    def test_subtest(self):
+        for i in range(3):
+            with self.subTest(i=i):
+                self.assertLess(i, 2)
+    def test_crash(self):
+        if os.environ.get("FAKE_CRASH"):
+            os.abort()
+'''
+
+
+def test_runner_outcomes_and_crash_recovery(tmp_path, monkeypatch):
+    (tmp_path / "test_fake.py").write_text(FAKE_TESTS)
+    monkeypatch.setenv("TAMIAS2D_PYMUNK_TESTS_DIR", str(tmp_path))
+    summary = dict(pymunk_compat.SUMMARY)
+    try:
+        result = pymunk_compat.run_test_file("test_fake.py", timeout=120)
+        assert result.crash is None and result.load_error is None
+        outcomes = {n: result.outcome(n) for n in result.declared}
+        assert outcomes == {"T.test_pass": "passed", "T.test_fail": "failed",
+                            "T.test_error": "error", "T.test_skip": "skipped",
+                            "T.test_subtest": "failed", "T.test_crash": "passed"}
+        assert "boom" in result.detail("T.test_error")
+        # a test that kills the process: the file is rerun one test at a time
+        monkeypatch.setenv("FAKE_CRASH", "1")
+        result = pymunk_compat.run_test_file("test_fake.py", timeout=120)
+        assert result.crash is not None
+        assert result.outcome("T.test_pass") == "passed"
+        assert result.outcome("T.test_crash") == "error"
+        assert "crash" in result.detail("T.test_crash")
+    finally:
+        pymunk_compat.SUMMARY.clear()
+        pymunk_compat.SUMMARY.update(summary)
+
+
+def test_alias_is_undone():
+    import sys
+    import pymunk
+    import tamias2d
+    with pymunk_compat.pymunk_aliased_to_tamias2d():
+        import pymunk as aliased
+        assert aliased is tamias2d
+        assert sys.modules["pymunk.vec2d"].Vec2d is tamias2d.Vec2d
+    assert sys.modules["pymunk"] is pymunk
+    assert not hasattr(tamias2d, "vec2d")
+    from pymunk.vec2d import Vec2d
+    assert Vec2d.__module__ == "pymunk.vec2d"
