@@ -547,6 +547,29 @@ def test_point_exactly_on_poly_edge_gives_nan_point_like_pymunk():
     assert math.isnan(tp.point_query((1, 0)).point.x)
 
 
+def test_poly_segment_query_near_parallel_faces():
+    # Munk2D skips a face when |an - bn| < 1e-5 (its "10e-6"); queries
+    # parallel or nearly parallel to a box face, both sides of that limit.
+    rng = random.Random(17)
+    for case in range(600):
+        w, h = rng.uniform(1, 5), rng.uniform(1, 5)
+        r = rng.choice([0.0, 0.5])
+        tp, pp = tamias2d.Poly.create_box(None, (w, h), r), pymunk.Poly.create_box(None, (w, h), r)
+        ang = rng.choice([0.0, rng.uniform(-3, 3)])
+        tr = (math.cos(ang), math.sin(ang), -math.sin(ang), math.cos(ang), 0.0, 0.0)
+        tp.update(tamias2d.Transform(*tr))
+        pp.update(pymunk.Transform(*tr))
+        # From just above the top face to just below it (or level with it):
+        # the face is crossed at t = d1 / (d1 + d2), skipped when d1 + d2 < 1e-5.
+        y = rng.choice([h / 2, h / 2 + r, rng.uniform(-h, h)])
+        d1 = rng.choice([0.0, 1e-6, 4e-6, 6e-6, 1e-3])
+        d2 = rng.choice([0.0, 1e-6, 4e-6, 6e-6, 1e-3])
+        a = (-10 * tr[0] + (y + d1) * tr[2], -10 * tr[1] + (y + d1) * tr[3])
+        b = (10 * tr[0] + (y - d2) * tr[2], 10 * tr[1] + (y - d2) * tr[3])
+        for rad in (0.0, 0.3):
+            compare_segment_query(tp, pp, a, b, rad, f"case {case} box {w} {h} r {r} angle {ang} {a} {b} {rad}")
+
+
 def test_rounded_poly_corners():
     rng = random.Random(12)
     for case in range(200):
