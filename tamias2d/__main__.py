@@ -207,7 +207,9 @@ def run_demo(args, stdout=None, stderr=None):
         written.append(f"{args.out} ({width}x{height})")
         if frames is not None:
             frames.save(args.gif)
-            written.append(f"{args.gif} ({len(frames)} frames, one every {frame_every} steps)")
+            count = f"{len(frames)} frame" + ("s" if len(frames) != 1 else "")
+            every = "every step" if frame_every == 1 else f"one every {frame_every} steps"
+            written.append(f"{args.gif} ({count}, {every})")
 
     if not args.quiet:
         space = scene.space

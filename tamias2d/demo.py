@@ -420,7 +420,11 @@ def make_draw_options(size, view, engine=None, supersample=3, contacts=False):
     if engine is not None and engine.__name__ != "tamias2d":
         # pymunk's Space.debug_draw needs pymunk's own options base class.
         options_class = type("DrawOptions", (pillow_util.PillowDrawing, engine.SpaceDebugDrawOptions), {})
-    options = options_class(size, bb=view, margin=16, background=BACKGROUND,
+    width, height = size
+    margin = min(16, min(width, height) // 20)
+    # Keep the supersampled canvas within about 16 million pixels.
+    supersample = max(1, min(supersample, int(math.sqrt(16e6 / (width * height)))))
+    options = options_class(size, bb=view, margin=margin, background=BACKGROUND,
                             supersample=supersample, line_width=1.0,
                             segment_width=2.5 if contacts else 1.0)
     options.flags = options.DRAW_SHAPES | options.DRAW_CONSTRAINTS
@@ -440,7 +444,7 @@ def render(scene, options, caption=None):
     options.clear()
     scene.space.debug_draw(options)
     image = options.image
-    if caption:
+    if caption and image.width >= 200 and image.height >= 100:  # no room on tiny pictures
         _caption(image, caption)
     return image
 
