@@ -253,3 +253,18 @@ def test_doctests(module):
 def test_main_without_command_prints_help(capsys):
     assert main([]) == 0
     assert "demo" in capsys.readouterr().out
+
+
+def test_demo_extreme_sizes_and_no_steps(tmp_path):
+    pytest.importorskip("PIL")
+    from PIL import Image
+
+    tiny = run_cli(["demo", "--size", "16x16", "--steps", "2", "--out", "tiny.png", "-q"],
+                   tmp_path)
+    assert tiny.returncode == 0, tiny.stderr
+    assert Image.open(tmp_path / "tiny.png").size == (16, 16)
+    none = run_cli(["demo", "--steps", "0", "--gif", "zero.gif", "--out", "zero.png"], tmp_path)
+    assert none.returncode == 0, none.stderr
+    assert "zero.gif (1 frame," in none.stdout
+    assert Image.open(tmp_path / "zero.gif").n_frames == 1
+    check_picture(str(tmp_path / "zero.png"))
