@@ -1200,7 +1200,7 @@ class Transform(tuple):
         """The inverse transform; a singular one raises ValueError.
 
         >>> Transform(2, 0, 0, 4, 1, 1).inverted()
-        Transform(a=0.5, b=-0.0, c=-0.0, d=0.25, tx=-0.5, ty=-0.25)
+        Transform(a=0.5, b=0.0, c=0.0, d=0.25, tx=-0.5, ty=-0.25)
         >>> Transform(1, 1, 1, 1).inverted()
         Traceback (most recent call last):
         ...
