@@ -771,9 +771,8 @@ def shapes_collide(shape_a, shape_b):
     """
     cdef const cpShape *a = shape_pointer(shape_a, "shape_a")
     cdef const cpShape *b = shape_pointer(shape_b, "shape_b")
-    cdef cpContactPointSet cps
-    with nogil:
-        cps = cpShapesCollide(a, b)
+    # Called with the GIL held: releasing it costs more than the call itself.
+    cdef cpContactPointSet cps = cpShapesCollide(a, b)
     collision_check_flags()
     return contact_point_set_from_cp(&cps)
 
@@ -922,8 +921,7 @@ def _collide(shape_a, shape_b, collision_id=0):
     cdef cpCollisionInfo info
     cdef cpCollisionID cid = collision_id
     cdef int i
-    with nogil:
-        info = cpCollide(a, b, cid, contacts)
+    info = cpCollide(a, b, cid, contacts)
     collision_check_flags()
     return (info.a == a, info.id, vec2d_from_cpv(info.n),
             [(vec2d_from_cpv(contacts[i].r1), vec2d_from_cpv(contacts[i].r2), contacts[i].hash)
@@ -952,8 +950,7 @@ def _collision_table_call(shape_a, shape_b):
     info.n = cpv(0.0, 0.0)
     info.count = 0
     info.arr = contacts
-    with nogil:
-        CollisionFuncs[<unsigned int>a.klass.type + <unsigned int>b.klass.type * CP_NUM_SHAPES](a, b, &info)
+    CollisionFuncs[<unsigned int>a.klass.type + <unsigned int>b.klass.type * CP_NUM_SHAPES](a, b, &info)
     collision_check_flags()
     return info.count
 
