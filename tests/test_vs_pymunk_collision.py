@@ -14,10 +14,11 @@ compared as well.
 A differing pair is printed with every input needed to rebuild it. No
 difference is tolerated.
 
-A second part checks the warm-started GJK (the collision id cached by the
-broad phase) against pymunk's space, which is the only place pymunk runs it:
-two kinematic bodies at the origin, three steps, the pre_solve contact set of
-the third step against tamias2d's cpCollide fed with the id of a cold call.
+Shapes without a body, placed with Shape.update, are compared the same way.
+
+A last part checks the warm-started GJK (the collision id cached by the
+broad phase) against pymunk's space, which is the only place pymunk runs it
+(see the comment above test_warm_started_gjk_matches_pymunk_space).
 """
 import math
 import random
@@ -371,6 +372,45 @@ def special_cases():
 def test_special_cases_match_pymunk():
     failures = run_cases(special_cases())
     assert not failures, "%d special cases differ from pymunk (printed above)" % len(failures)
+
+
+# -- shapes without a body, placed with Shape.update ---------------------------------------
+# The narrow phase takes the segment tangents' rotation from the body, and
+# (1, 0) when there is none, whatever transform placed the shape.
+
+BODYLESS_CASES = 600
+
+
+def build_bodyless(mod, case):
+    shapes = []
+    for key, pos, angle in (("a", case["pos_a"], case["angle_a"]), ("b", case["pos_b"], case["angle_b"])):
+        shape = build_shape(mod, None, case[key])
+        if "neighbors" in case[key]:
+            shape.set_neighbors(*case[key]["neighbors"])
+        c, s = math.cos(angle), math.sin(angle)
+        shape.update(mod.Transform(a=c, b=s, c=-s, d=c, tx=pos[0], ty=pos[1]))
+        shapes.append(shape)
+    return shapes
+
+
+def test_bodyless_shapes_match_pymunk():
+    rng = random.Random("tamias2d-collision-bodyless")
+    failures = []
+    for index in range(BODYLESS_CASES):
+        kind_a, kind_b = ORDERED_PAIRS[index % len(ORDERED_PAIRS)]
+        case = dict(rand_case(rng, kind_a, kind_b), same_body=False)
+        pa, pb = build_bodyless(pymunk, case)
+        ta, tb = build_bodyless(tamias2d, case)
+        count, normal, points = reference(pa, pb)
+        got = collision.shapes_collide(ta, tb)
+        ok = len(got.points) == count and same_vec(normal, got.normal)
+        for (p_a, p_b, dist), g in zip(points, got.points):
+            ok = ok and same_vec(p_a, g.point_a) and same_vec(p_b, g.point_b) and same(dist, g.distance)
+        if not ok:
+            failures.append((index, case, (count, normal, points), got))
+    for index, case, expected, got in failures[:40]:
+        print("MISMATCH bodyless case %d: pymunk %r tamias2d %r\n  inputs: %r" % (index, expected, got, case))
+    assert not failures, "%d of %d body-less pairs differ from pymunk" % (len(failures), BODYLESS_CASES)
 
 
 # -- the warm-started GJK, against pymunk's space ------------------------------------------
