@@ -132,27 +132,38 @@ def rain(mod, count=520):
     return space
 
 
-def drum(mod, count=120, box=14.0):
-    """A kinematic octagonal drum turning slowly, full of boxes."""
+def drum(mod, count=120, box=14.0, radius=200.0, spin=0.6, wall=4.0):
+    """A kinematic octagonal drum turning slowly, full of boxes (placed on a
+    grid inside the drum, row by row from the bottom)."""
     space = mod.Space()
     space.gravity = 0, -900
     drum_body = mod.Body(body_type=mod.Body.KINEMATIC)
     drum_body.position = 0, 0
-    drum_body.angular_velocity = 0.6
+    drum_body.angular_velocity = spin
     space.add(drum_body)
-    radius = 200.0
     n = 8
     corners = [(radius * math.cos(2 * math.pi * k / n), radius * math.sin(2 * math.pi * k / n))
                for k in range(n)]
     for k in range(n):
-        seg = mod.Segment(drum_body, corners[k], corners[(k + 1) % n], 4.0)
+        seg = mod.Segment(drum_body, corners[k], corners[(k + 1) % n], wall)
         seg.friction = 0.9
         space.add(seg)
-    per_row = 10
-    for i in range(count):
-        row, col = divmod(i, per_row)
+    pitch = box + 4.0
+    inner = radius * math.cos(math.pi / n) - wall - 2.0 - box  # inside the flat sides
+    cells = []
+    y = -inner + box / 2.0
+    while y < inner and len(cells) < count:
+        half = math.sqrt(max(inner * inner - y * y, 0.0))
+        x = -half + box / 2.0
+        while x < half - box / 2.0 and len(cells) < count:
+            cells.append((x, y))
+            x += pitch
+        y += pitch
+    if len(cells) < count:
+        raise ValueError(f"{count} boxes of {box} do not fit in a drum of radius {radius}")
+    for i, (x, y) in enumerate(cells):
         body = mod.Body(1.0, box_moment(1.0, box, box))
-        body.position = -90.0 + col * (box + 4.0), -120.0 + row * (box + 4.0)
+        body.position = x, y
         body.angle = 0.1 * (i % 5)
         shape = mod.Poly.create_box(body, (box, box), 0.5)
         shape.friction = 0.7
