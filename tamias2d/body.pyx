@@ -907,7 +907,9 @@ cdef class Body:
         >>> b.velocity
         Vec2d(0.0, -5.0)
         """
-        cdef cpVect g = cpv_from_object(gravity)
+        cdef cpVect g = _finite_vect(gravity, "gravity")
+        if not (_finite(damping) and _finite(dt)):
+            raise IllegalBody("damping and dt must be finite, got %r and %r." % (damping, dt))
         cpBodyUpdateVelocity(&body._body, g, damping, dt)
 
     @staticmethod
@@ -921,6 +923,8 @@ cdef class Body:
         >>> b.position
         Vec2d(1.0, 0.0)
         """
+        if not _finite(dt):
+            raise IllegalBody("dt must be finite, got %r." % dt)
         cpBodyUpdatePosition(&body._body, dt)
 
     # -- forces and impulses ---------------------------------------------------------

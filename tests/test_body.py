@@ -19,6 +19,7 @@ from tamias2d import Body
 from tamias2d.errors import IllegalBody, NotInSpace
 
 SEEDS = range(40)
+BAD_FLOATS = [math.nan, math.inf, -math.inf]
 
 SCALAR_ATTRS = ("mass", "moment", "angle", "angular_velocity", "torque", "kinetic_energy")
 VECTOR_ATTRS = ("position", "center_of_gravity", "velocity", "force", "rotation_vector")
@@ -453,6 +454,17 @@ def test_integrator_exception_without_space_is_unraisable(monkeypatch):
     assert seen[0].exc_traceback is not None
 
 
+@pytest.mark.parametrize("bad", BAD_FLOATS)
+def test_update_functions_reject_non_finite_input(bad):
+    b = Body(1, 2)
+    for args in [((bad, 0), 1, 1), ((0, 0), bad, 1), ((0, 0), 1, bad)]:
+        with pytest.raises(IllegalBody):
+            Body.update_velocity(b, *args)
+    with pytest.raises(IllegalBody):
+        Body.update_position(b, bad)
+    assert_same(b, pymunk.Body(1, 2))
+
+
 def test_integrator_setters_reject_non_callables():
     b = Body(1, 1)
     with pytest.raises(TypeError):
@@ -463,7 +475,6 @@ def test_integrator_setters_reject_non_callables():
 
 
 # -- bad input ----------------------------------------------------------------------------------
-BAD_FLOATS = [math.nan, math.inf, -math.inf]
 
 
 @pytest.mark.parametrize("bad", BAD_FLOATS)
