@@ -27,34 +27,40 @@ from tamias2d._config cimport (cpFloat, cpBool, cpHashValue, cpCollisionType,
 from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact,
     cpArray, cpCollisionInfo, cpCollisionHandler, cpContactBufferHeader,
     cpPostStepCallback, cpPostStepFunc, cpConstraint, cpBodyType,
-    cpCircleShape, cpSegmentShape, cpPolyShape, cpSplittingPlane,
+    cpCircleShape, cpSegmentShape, cpPolyShape, cpSplittingPlane, cpShapeFilter,
+    cpPointQueryInfo, cpSegmentQueryInfo, cpContactPointSet,
     cpSpatialIndex, cpSpatialIndexIteratorFunc, cpSpatialIndexQueryFunc,
     cpHashSetFilterFunc, cpHashSetIteratorFunc, cpHashSetEqlFunc, cpHashSetTransFunc,
     CP_BODY_TYPE_DYNAMIC, CP_BODY_TYPE_KINEMATIC, CP_BODY_TYPE_STATIC,
     CP_CIRCLE_SHAPE, CP_SEGMENT_SHAPE, CP_POLY_SHAPE,
     CP_ARBITER_STATE_FIRST_COLLISION, CP_ARBITER_STATE_NORMAL,
     CP_ARBITER_STATE_IGNORE, CP_ARBITER_STATE_CACHED, CP_ARBITER_STATE_INVALIDATED)
-from tamias2d._containers cimport (cpcalloc, cpfree, cpArrayNew, cpArrayFree, cpArrayPush,
+from tamias2d._containers cimport (cpcalloc, cprealloc, cpfree, cpArrayNew, cpArrayFree, cpArrayPush,
     cpArrayPop, cpArrayDeleteObj, cpArrayFreeEach, cpArrayContains, cpHashSetNew,
     cpHashSetFree, cpHashSetInsert, cpHashSetRemove, cpHashSetFind, cpHashSetEach,
     cpHashSetFilter, cpTakeOutOfMemory)
 from tamias2d._bbtree cimport (cpBBTreeNew, cpBBTreeSetVelocityFunc, cpBBTreeVelocityFunc,
     cpSpatialIndexFree, cpSpatialIndexEach, cpSpatialIndexInsert, cpSpatialIndexRemove,
-    cpSpatialIndexReindex, cpSpatialIndexReindexObject, cpSpatialIndexReindexQuery)
+    cpSpatialIndexReindex, cpSpatialIndexReindexObject, cpSpatialIndexReindexQuery,
+    cpSpatialIndexQuery, cpSpatialIndexSegmentQuery)
 from tamias2d._spacehash cimport cpSpaceHashNew
 from tamias2d.vector cimport (cpVect, cpBB, cpTransform, cpv, cpvadd, cpvsub, cpvmult,
-    cpvlengthsq, cpvdist, cpBBIntersects, cpTransformPoint, vec2d_from_cpv,
-    cpv_from_object, cpv_from_object_finite, cptransform_from_object)
+    cpvlengthsq, cpvdist, cpfmax, cpBBIntersects, cpBBNewForCircle, cpTransformPoint,
+    vec2d_from_cpv, cpv_from_object, cpv_from_object_finite, cptransform_from_object,
+    cpbb_from_object)
 from tamias2d.body cimport (Body, cpBodyInit, cpBodySetType, cpBodyActivate,
     cpBodyActivateStatic, cpBodyAddShape, cpBodyRemoveShape, cpBodyGetType,
     cpBodyIsSleeping, cpBodyKineticEnergy, tamias_BodySpaceHooks, tamias_set_body_space_hooks)
-from tamias2d.shape cimport Shape, cpShapeUpdate, cpShapeCacheBB, cpShapeFilterReject
-from tamias2d.collision cimport cpCollide, collision_check_flags
+from tamias2d.shape cimport (Shape, cpShapeUpdate, cpShapeCacheBB, cpShapeFilterReject,
+    cpShapePointQuery, cpShapeSegmentQuery)
+from tamias2d.collision cimport (cpCollide, cpShapesCollide, collision_check_flags,
+    contact_point_set_from_cp)
 from tamias2d.arbiter cimport (Arbiter, arbiter_wrap, cpArbiterInit, cpArbiterUpdate,
     cpArbiterPreStep, cpArbiterApplyCachedImpulse, cpArbiterApplyImpulse,
     cpArbiterUnthread, cpCollisionHandlerDoNothing, cpCollisionDoNothing,
     cpArbiterThreadForBody, cpArbiterNext)
 
+from tamias2d.shape import PointQueryInfo, SegmentQueryInfo, ShapeQueryInfo
 from tamias2d.errors import (IllegalBody, IllegalShape, SpaceLocked, AlreadyInSpace,
     NotInSpace, IllegalCollisionType)
 
@@ -1079,6 +1085,221 @@ cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt) noexcept nogil:
             body.sleeping.next = NULL
 
 
+
+# -- queries (cpSpaceQuery.c) ---------------------------------------------------------------------
+# Munk2D reports each hit through a user callback. Here hits are gathered in
+# a C buffer (in the same order) and turned into Python objects after the
+# query, so no Python runs while the indexes are being walked.
+
+cdef struct QueryHit:
+    cpShape *shape
+    cpVect point
+    cpVect vect          # gradient (point query) or normal (segment query)
+    cpFloat value        # distance or alpha
+
+cdef struct QueryHits:
+    QueryHit *hits
+    int count
+    int capacity
+    cpBool failed        # out of memory: some hits were lost
+
+cdef inline void _hitsPush(QueryHits *out, cpShape *shape, cpVect point, cpVect vect,
+                           cpFloat value) noexcept nogil:
+    cdef int cap
+    cdef QueryHit *grown
+    if out.count == out.capacity:
+        cap = 8 if out.capacity == 0 else 2 * out.capacity
+        grown = <QueryHit *>cprealloc(out.hits, cap * sizeof(QueryHit))
+        if grown == NULL:
+            out.failed = 1
+            return
+        out.hits = grown
+        out.capacity = cap
+    out.hits[out.count].shape = shape
+    out.hits[out.count].point = point
+    out.hits[out.count].vect = vect
+    out.hits[out.count].value = value
+    out.count += 1
+
+cdef struct PointQueryContext:
+    cpVect point
+    cpFloat maxDistance
+    cpShapeFilter filter
+
+cdef cpCollisionID NearestPointQuery(void *ctx, void *obj, cpCollisionID id, void *data) noexcept nogil:
+    cdef PointQueryContext *context = <PointQueryContext *>ctx
+    cdef cpShape *shape = <cpShape *>obj
+    cdef cpPointQueryInfo info
+    if not cpShapeFilterReject(shape.filter, context.filter):
+        cpShapePointQuery(shape, context.point, &info)
+        if info.shape != NULL and info.distance < context.maxDistance:
+            _hitsPush(<QueryHits *>data, shape, info.point, info.gradient, info.distance)
+    return id
+
+cdef void cpSpacePointQuery(cpSpace *space, cpVect point, cpFloat maxDistance, cpShapeFilter filter,
+                            QueryHits *out) noexcept nogil:
+    cdef PointQueryContext context
+    context.point = point
+    context.maxDistance = maxDistance
+    context.filter = filter
+    cdef cpBB bb = cpBBNewForCircle(point, cpfmax(maxDistance, 0.0))
+    cpSpaceLock(space)
+    cpSpatialIndexQuery(space.dynamicShapes, &context, bb, NearestPointQuery, out)
+    cpSpatialIndexQuery(space.staticShapes, &context, bb, NearestPointQuery, out)
+    cpSpaceUnlock(space, 1)
+
+cdef cpCollisionID NearestPointQueryNearest(void *ctx, void *obj, cpCollisionID id,
+                                            void *data) noexcept nogil:
+    cdef PointQueryContext *context = <PointQueryContext *>ctx
+    cdef cpShape *shape = <cpShape *>obj
+    cdef cpPointQueryInfo *out = <cpPointQueryInfo *>data
+    cdef cpPointQueryInfo info
+    if not cpShapeFilterReject(shape.filter, context.filter):
+        cpShapePointQuery(shape, context.point, &info)
+        if info.distance < out.distance:
+            out[0] = info
+    return id
+
+cdef cpShape *cpSpacePointQueryNearest(cpSpace *space, cpVect point, cpFloat maxDistance,
+                                       cpShapeFilter filter, cpPointQueryInfo *out) noexcept nogil:
+    out.shape = NULL
+    out.point = cpv(0.0, 0.0)
+    out.distance = maxDistance
+    out.gradient = cpv(0.0, 0.0)
+    cdef PointQueryContext context
+    context.point = point
+    context.maxDistance = maxDistance
+    context.filter = filter
+    cdef cpBB bb = cpBBNewForCircle(point, cpfmax(maxDistance, 0.0))
+    cpSpatialIndexQuery(space.dynamicShapes, &context, bb, NearestPointQueryNearest, out)
+    cpSpatialIndexQuery(space.staticShapes, &context, bb, NearestPointQueryNearest, out)
+    return <cpShape *>out.shape
+
+cdef struct SegmentQueryContext:
+    cpVect start
+    cpVect end
+    cpFloat radius
+    cpShapeFilter filter
+
+cdef cpFloat SegmentQuery(void *ctx, void *obj, void *data) noexcept nogil:
+    cdef SegmentQueryContext *context = <SegmentQueryContext *>ctx
+    cdef cpShape *shape = <cpShape *>obj
+    cdef cpSegmentQueryInfo info
+    if (not cpShapeFilterReject(shape.filter, context.filter)
+            and cpShapeSegmentQuery(shape, context.start, context.end, context.radius, &info)):
+        _hitsPush(<QueryHits *>data, shape, info.point, info.normal, info.alpha)
+    return 1.0
+
+cdef void cpSpaceSegmentQuery(cpSpace *space, cpVect start, cpVect end, cpFloat radius,
+                              cpShapeFilter filter, QueryHits *out) noexcept nogil:
+    cdef SegmentQueryContext context
+    context.start = start
+    context.end = end
+    context.radius = radius
+    context.filter = filter
+    cpSpaceLock(space)
+    cpSpatialIndexSegmentQuery(space.staticShapes, &context, start, end, 1.0, SegmentQuery, out)
+    cpSpatialIndexSegmentQuery(space.dynamicShapes, &context, start, end, 1.0, SegmentQuery, out)
+    cpSpaceUnlock(space, 1)
+
+cdef cpFloat SegmentQueryFirst(void *ctx, void *obj, void *data) noexcept nogil:
+    cdef SegmentQueryContext *context = <SegmentQueryContext *>ctx
+    cdef cpShape *shape = <cpShape *>obj
+    cdef cpSegmentQueryInfo *out = <cpSegmentQueryInfo *>data
+    cdef cpSegmentQueryInfo info
+    if (not cpShapeFilterReject(shape.filter, context.filter)
+            and cpShapeSegmentQuery(shape, context.start, context.end, context.radius, &info)
+            and info.alpha < out.alpha):
+        out[0] = info
+    return out.alpha
+
+cdef cpShape *cpSpaceSegmentQueryFirst(cpSpace *space, cpVect start, cpVect end, cpFloat radius,
+                                       cpShapeFilter filter, cpSegmentQueryInfo *out) noexcept nogil:
+    out.shape = NULL
+    out.point = end
+    out.normal = cpv(0.0, 0.0)
+    out.alpha = 1.0
+    cdef SegmentQueryContext context
+    context.start = start
+    context.end = end
+    context.radius = radius
+    context.filter = filter
+    cpSpatialIndexSegmentQuery(space.staticShapes, &context, start, end, 1.0, SegmentQueryFirst, out)
+    # The static hit bounds the search of the dynamic tree.
+    cpSpatialIndexSegmentQuery(space.dynamicShapes, &context, start, end, out.alpha,
+                               SegmentQueryFirst, out)
+    return <cpShape *>out.shape
+
+cdef struct BBQueryContext:
+    cpBB bb
+    cpShapeFilter filter
+
+cdef cpCollisionID BBQuery(void *ctx, void *obj, cpCollisionID id, void *data) noexcept nogil:
+    cdef BBQueryContext *context = <BBQueryContext *>ctx
+    cdef cpShape *shape = <cpShape *>obj
+    if (not cpShapeFilterReject(shape.filter, context.filter)
+            and cpBBIntersects(context.bb, shape.bb)):
+        _hitsPush(<QueryHits *>data, shape, cpv(0.0, 0.0), cpv(0.0, 0.0), 0.0)
+    return id
+
+cdef void cpSpaceBBQuery(cpSpace *space, cpBB bb, cpShapeFilter filter, QueryHits *out) noexcept nogil:
+    cdef BBQueryContext context
+    context.bb = bb
+    context.filter = filter
+    cpSpaceLock(space)
+    cpSpatialIndexQuery(space.dynamicShapes, &context, bb, BBQuery, out)
+    cpSpatialIndexQuery(space.staticShapes, &context, bb, BBQuery, out)
+    cpSpaceUnlock(space, 1)
+
+cdef struct ShapeQueryHits:
+    cpShape **shapes
+    cpContactPointSet *sets
+    int count
+    int capacity
+    cpBool failed
+    cpBool anyCollision
+
+cdef cpCollisionID ShapeQuery(void *obj_a, void *obj_b, cpCollisionID id, void *data) noexcept nogil:
+    cdef cpShape *a = <cpShape *>obj_a
+    cdef cpShape *b = <cpShape *>obj_b
+    cdef ShapeQueryHits *out = <ShapeQueryHits *>data
+    cdef cpContactPointSet set
+    cdef int cap
+    cdef cpShape **shapes
+    cdef cpContactPointSet *sets
+    if cpShapeFilterReject(a.filter, b.filter) or a == b:
+        return id
+    set = cpShapesCollide(a, b)
+    if set.count:
+        if out.count == out.capacity:
+            cap = 8 if out.capacity == 0 else 2 * out.capacity
+            shapes = <cpShape **>cprealloc(out.shapes, cap * sizeof(cpShape *))
+            if shapes != NULL:
+                out.shapes = shapes
+                sets = <cpContactPointSet *>cprealloc(out.sets, cap * sizeof(cpContactPointSet))
+                if sets != NULL:
+                    out.sets = sets
+                    out.capacity = cap
+        if out.count < out.capacity:
+            out.shapes[out.count] = b
+            out.sets[out.count] = set
+            out.count += 1
+        else:
+            out.failed = 1
+        out.anyCollision |= not (a.sensor or b.sensor)
+    return id
+
+cdef cpBool cpSpaceShapeQuery(cpSpace *space, cpShape *shape, ShapeQueryHits *out) noexcept nogil:
+    cdef cpBody *body = shape.body
+    # The query shape's cached data is refreshed from its body, as Munk2D does.
+    cdef cpBB bb = cpShapeUpdate(shape, body.transform) if body != NULL else shape.bb
+    cpSpaceLock(space)
+    cpSpatialIndexQuery(space.dynamicShapes, shape, bb, ShapeQuery, out)
+    cpSpatialIndexQuery(space.staticShapes, shape, bb, ShapeQuery, out)
+    cpSpaceUnlock(space, 1)
+    return out.anyCollision
+
+
 # -- hooks for the body module -------------------------------------------------------------------
 
 cdef void _hookWakeComponent(cpSpace *space, cpBody *root) noexcept nogil:
@@ -1288,6 +1509,36 @@ def _arbiter_for_body(arb_ptr, space):
 
 cdef inline object _shape_obj(const cpShape *shape):
     return <object>shape.userData
+
+cdef cpShapeFilter _filter_from_object(object f) except *:
+    cdef cpShapeFilter cf
+    try:
+        group, categories, mask = f
+    except (TypeError, ValueError):
+        raise TypeError("shape_filter must be a ShapeFilter (group, categories, mask)") from None
+    cf.group = group
+    cf.categories = categories
+    cf.mask = mask
+    return cf
+
+
+cdef list _hits_to_list(QueryHits *hits, int kind):
+    # kind 0: PointQueryInfo, 1: SegmentQueryInfo, 2: shapes
+    cdef list result = []
+    cdef int i
+    cdef QueryHit *h
+    for i in range(hits.count):
+        h = &hits.hits[i]
+        shape = <object>h.shape.userData
+        if kind == 0:
+            result.append(PointQueryInfo(shape, vec2d_from_cpv(h.point), h.value,
+                                         vec2d_from_cpv(h.vect)))
+        elif kind == 1:
+            result.append(SegmentQueryInfo(shape, vec2d_from_cpv(h.point),
+                                           vec2d_from_cpv(h.vect), h.value))
+        else:
+            result.append(shape)
+    return result
 
 
 @cython.no_gc_clear
@@ -1967,6 +2218,170 @@ cdef class Space:
 
         self._post_step_callbacks[key] = f
         return True
+
+    # -- queries -------------------------------------------------------------------------------
+
+    def point_query(self, point, max_distance, shape_filter):
+        """Shapes within ``max_distance`` of ``point`` (0: the point must be
+        inside; negative: that deep inside), as a list of
+        :class:`PointQueryInfo`. Sensors are included.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> c = tamias2d.Circle(s.static_body, 10)
+        >>> s.add(c)
+        >>> [(h.shape is c, h.distance) for h in s.point_query((15, 0), 10, tamias2d.ShapeFilter())]
+        [(True, 5.0)]
+        """
+        cdef cpVect p = cpv_from_object(point)
+        cdef cpFloat d = max_distance
+        cdef cpShapeFilter f = _filter_from_object(shape_filter)
+        cdef QueryHits hits
+        hits.hits = NULL
+        hits.count = hits.capacity = 0
+        hits.failed = 0
+        try:
+            cpSpacePointQuery(&self._space, p, d, f, &hits)
+            if hits.failed:
+                cpTakeOutOfMemory()
+                raise MemoryError("not enough memory for the query results")
+            return _hits_to_list(&hits, 0)
+        finally:
+            cpfree(hits.hits)
+
+    def point_query_nearest(self, point, max_distance, shape_filter):
+        """The shape nearest to ``point`` within ``max_distance``, as a
+        :class:`PointQueryInfo`, or None. Sensors are included.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> s.add(tamias2d.Circle(s.static_body, 10))
+        >>> s.point_query_nearest((0, 25), 20, tamias2d.ShapeFilter()).point
+        Vec2d(0.0, 10.0)
+        >>> s.point_query_nearest((0, 25), 5, tamias2d.ShapeFilter()) is None
+        True
+        """
+        cdef cpVect p = cpv_from_object(point)
+        cdef cpFloat d = max_distance
+        cdef cpShapeFilter f = _filter_from_object(shape_filter)
+        cdef cpPointQueryInfo info
+        cdef cpShape *shape = cpSpacePointQueryNearest(&self._space, p, d, f, &info)
+        if shape == NULL:
+            return None
+        return PointQueryInfo(<object>shape.userData, vec2d_from_cpv(info.point), info.distance,
+                              vec2d_from_cpv(info.gradient))
+
+    def segment_query(self, start, end, radius, shape_filter):
+        """Shapes hit by the segment from ``start`` to ``end`` swept with
+        ``radius``, as a list of :class:`SegmentQueryInfo` (static shapes
+        first). Sensors are included.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> s.add(tamias2d.Circle(s.static_body, 10))
+        >>> [h.alpha for h in s.segment_query((-20, 0), (20, 0), 0, tamias2d.ShapeFilter())]
+        [0.25]
+        """
+        cdef cpVect a = cpv_from_object(start)
+        cdef cpVect b = cpv_from_object(end)
+        cdef cpFloat r = radius
+        cdef cpShapeFilter f = _filter_from_object(shape_filter)
+        cdef QueryHits hits
+        hits.hits = NULL
+        hits.count = hits.capacity = 0
+        hits.failed = 0
+        try:
+            cpSpaceSegmentQuery(&self._space, a, b, r, f, &hits)
+            if hits.failed:
+                cpTakeOutOfMemory()
+                raise MemoryError("not enough memory for the query results")
+            return _hits_to_list(&hits, 1)
+        finally:
+            cpfree(hits.hits)
+
+    def segment_query_first(self, start, end, radius, shape_filter):
+        """The first shape hit by the segment from ``start`` to ``end``
+        swept with ``radius``, as a :class:`SegmentQueryInfo`, or None.
+        Sensors are included.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> s.add(tamias2d.Circle(s.static_body, 10))
+        >>> s.segment_query_first((-20, 0), (20, 0), 0, tamias2d.ShapeFilter()).point
+        Vec2d(-10.0, 0.0)
+        """
+        cdef cpVect a = cpv_from_object(start)
+        cdef cpVect b = cpv_from_object(end)
+        cdef cpFloat r = radius
+        cdef cpShapeFilter f = _filter_from_object(shape_filter)
+        cdef cpSegmentQueryInfo info
+        cdef cpShape *shape = cpSpaceSegmentQueryFirst(&self._space, a, b, r, f, &info)
+        if shape == NULL:
+            return None
+        return SegmentQueryInfo(<object>shape.userData, vec2d_from_cpv(info.point),
+                                vec2d_from_cpv(info.normal), info.alpha)
+
+    def bb_query(self, bb, shape_filter):
+        """Shapes whose bounding box overlaps ``bb``, as a list. Sensors are
+        included.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> c = tamias2d.Circle(s.static_body, 10)
+        >>> s.add(c)
+        >>> s.bb_query(tamias2d.BB(5, 5, 20, 20), tamias2d.ShapeFilter()) == [c]
+        True
+        """
+        cdef cpBB cbb = cpbb_from_object(bb)
+        cdef cpShapeFilter f = _filter_from_object(shape_filter)
+        cdef QueryHits hits
+        hits.hits = NULL
+        hits.count = hits.capacity = 0
+        hits.failed = 0
+        try:
+            cpSpaceBBQuery(&self._space, cbb, f, &hits)
+            if hits.failed:
+                cpTakeOutOfMemory()
+                raise MemoryError("not enough memory for the query results")
+            return _hits_to_list(&hits, 2)
+        finally:
+            cpfree(hits.hits)
+
+    def shape_query(self, shape):
+        """Shapes overlapping ``shape`` (which need not be in the space), as
+        a list of :class:`ShapeQueryInfo`. Sensors are included. The query
+        shape's cached position is refreshed from its body first.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> c = tamias2d.Circle(s.static_body, 10)
+        >>> s.add(c)
+        >>> probe = tamias2d.Circle(tamias2d.Body(body_type=tamias2d.Body.KINEMATIC), 5)
+        >>> [h.shape is c for h in s.shape_query(probe)]
+        [True]
+        """
+        if not isinstance(shape, Shape):
+            raise TypeError(f"shape_query needs a Shape, not {type(shape).__name__}")
+        cdef Shape sh = <Shape>shape
+        cdef ShapeQueryHits hits
+        cdef int i
+        hits.shapes = NULL
+        hits.sets = NULL
+        hits.count = hits.capacity = 0
+        hits.failed = 0
+        hits.anyCollision = 0
+        try:
+            cpSpaceShapeQuery(&self._space, sh._shape, &hits)
+            collision_check_flags()
+            if hits.failed:
+                cpTakeOutOfMemory()
+                raise MemoryError("not enough memory for the query results")
+            return [ShapeQueryInfo(<object>hits.shapes[i].userData,
+                                   contact_point_set_from_cp(&hits.sets[i]))
+                    for i in range(hits.count)]
+        finally:
+            cpfree(hits.shapes)
+            cpfree(hits.sets)
 
     # -- debug drawing -------------------------------------------------------------------------
 

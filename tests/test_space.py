@@ -698,3 +698,41 @@ def test_step_releases_the_gil():
     t.join()
     assert seen == [False]  # deferred: the step was running
     assert late in s.bodies  # and applied when it ended
+
+
+# -- queries ------------------------------------------------------------------------------------
+
+def test_queries_include_sensors_and_apply_filters():
+    s = Space()
+    c = Circle(s.static_body, 10)
+    c.sensor = True
+    s.add(c)
+    f = tamias2d.ShapeFilter()
+    assert [h.shape for h in s.point_query((0, 0), 100, f)] == [c]
+    assert s.point_query_nearest((0, 0), 100, f).shape is c
+    assert [h.shape for h in s.segment_query((-20, 0), (20, 0), 1, f)] == [c]
+    assert s.segment_query_first((-20, 0), (20, 0), 1, f).shape is c
+    assert s.bb_query(tamias2d.BB(0, 0, 10, 10), f) == [c]
+    assert [h.shape for h in s.shape_query(Circle(None, 200))] == [c]
+    c.filter = tamias2d.ShapeFilter(categories=0b10, mask=0b10)
+    other = tamias2d.ShapeFilter(categories=0b01, mask=0b01)
+    assert s.point_query((0, 0), 100, other) == []
+    assert s.point_query_nearest((0, 0), 100, other) is None
+    assert s.segment_query_first((-20, 0), (20, 0), 1, other) is None
+    with pytest.raises(TypeError):
+        s.point_query((0, 0), 1, "no filter")
+    with pytest.raises(TypeError):
+        s.shape_query("no shape")
+
+
+def test_queries_from_inside_a_callback():
+    s, b, c = _two_circles()
+    found = []
+
+    def pre_solve(arb, space, data):
+        found.append(len(space.point_query((0, 0), 1, tamias2d.ShapeFilter())))
+        found.append(len(space.bb_query(tamias2d.BB(-1, -1, 1, 1), tamias2d.ShapeFilter())))
+
+    s.on_collision(pre_solve=pre_solve)
+    s.step(0.01)
+    assert found == [2, 2]

@@ -315,3 +315,57 @@ def test_collision_handler_order_pymunk_case():
     build(T, ct)
     assert len(cp) == 20
     assert cp == ct
+
+
+def test_queries_match_pymunk():
+    # Every query on a settled mixed scene (dynamic and static shapes,
+    # several kinds): same shapes in the same order, same numbers.
+    sc = scenes.SCENES["mixed"]
+    sp, st = run_side_by_side("mixed", sc.build, sc.dt, 200)
+    ip = {s: i for i, s in enumerate(sp.shapes)}
+    it = {s: i for i, s in enumerate(st.shapes)}
+    for space, mod in ((sp, pymunk), (st, T)):
+        space.add(mod.Segment(space.static_body, (-50, 300), (50, 300), 1))  # static, far
+
+    def norm(result, index):
+        if result is None:
+            return None
+        if isinstance(result, list):
+            return [norm(r, index) for r in result]
+        if hasattr(result, "contact_point_set"):
+            ps = result.contact_point_set
+            return (index.get(result.shape, "new"), ps.normal,
+                    [(p.point_a, p.point_b, p.distance) for p in ps.points])
+        if hasattr(result, "shape"):
+            return (index.get(result.shape, "new"),) + tuple(result)[1:]
+        return index.get(result, "new")
+
+    def queries(space, mod):
+        f = mod.ShapeFilter()
+        f2 = mod.ShapeFilter(categories=1, mask=1)
+        out = []
+        for x in range(-400, 401, 40):
+            for y in (-10, 0, 20, 60, 150, 300):
+                out.append(space.point_query((x, y), 15, f))
+                out.append(space.point_query_nearest((x, y), 40, f))
+                out.append(space.point_query((x, y), 0, f2))
+        for y in (5, 15, 30, 60, 300):
+            out.append(space.segment_query((-420, y), (420, y + 30), 0, f))
+            out.append(space.segment_query((-420, y), (420, y + 30), 6, f))
+            out.append(space.segment_query_first((-420, y), (420, y + 30), 0, f))
+            out.append(space.segment_query_first((420, y), (-420, y - 30), 6, f))
+        for l in range(-400, 400, 80):
+            out.append(space.bb_query(mod.BB(l, -20, l + 120, 80), f))
+        probe_body = mod.Body(body_type=mod.Body.KINEMATIC)
+        for pos in ((0, 10), (-200, 60), (250, 90)):
+            probe_body.position = pos
+            out.append(space.shape_query(mod.Circle(probe_body, 30)))
+            out.append(space.shape_query(mod.Poly.create_box(probe_body, (80, 20))))
+        return out
+
+    qp = [norm(r, ip) for r in queries(sp, pymunk)]
+    qt = [norm(r, it) for r in queries(st, T)]
+    assert sum(bool(q) for q in qp) > 50
+    for k, (a, b) in enumerate(zip(qp, qt)):
+        assert a == b, f"query {k} differs"
+    assert len(qp) == len(qt)
