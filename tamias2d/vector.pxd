@@ -4,6 +4,7 @@
 # that results are bitwise equal to pymunk's.
 from libc.math cimport sqrt, cos, sin, atan2, acos, fmod, INFINITY
 from libc.float cimport DBL_MIN
+from libc.limits cimport INT_MAX, INT_MIN
 from tamias2d._config cimport cpFloat, cpBool
 
 ctypedef struct cpVect:
@@ -142,6 +143,17 @@ cdef inline cpFloat cpvdistsq(cpVect v1, cpVect v2) noexcept nogil:  # vectDistS
 
 cdef inline cpBool cpvnear(cpVect v1, cpVect v2, cpFloat dist) noexcept nogil:  # vectNear
     return cpvdistsq(v1, v2) < dist * dist
+
+# MIS 9.3.1 exported constants. zeroVect is Munk2D's cpvzero and PI its CP_PI;
+# VECT_ERR ({INT_MAX, INT_MIN}) has no use in Munk2D and exists for the MIS.
+# (Cython has no struct constants, hence the inline functions.)
+cdef const cpFloat CP_PI = 3.14159265358979323846264338327950288
+
+cdef inline cpVect cpvzero() noexcept nogil:  # zeroVect
+    return cpv(0.0, 0.0)
+
+cdef inline cpVect VECT_ERR() noexcept nogil:  # VECT_ERR
+    return cpv(<cpFloat>INT_MAX, <cpFloat>INT_MIN)
 
 cdef inline cpMat2x2 cpMat2x2New(cpFloat a, cpFloat b, cpFloat c, cpFloat d) noexcept nogil:
     cdef cpMat2x2 m

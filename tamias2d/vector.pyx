@@ -1294,3 +1294,115 @@ def _cptransform_roundtrip(o):
     Transform(a=1.0, b=0.0, c=0.0, d=1.0, tx=0.0, ty=0.0)
     """
     return transform_from_cp(cptransform_from_object(o))
+
+
+def _mis_constants():
+    """The MIS 9.3.1 constants as the C side defines them:
+    ``(zeroVect, VECT_ERR, PI)``.
+
+    >>> _mis_constants()
+    (Vec2d(0.0, 0.0), Vec2d(2147483647.0, -2147483648.0), 3.141592653589793)
+    """
+    return vec2d_from_cpv(cpvzero()), vec2d_from_cpv(VECT_ERR()), CP_PI
+
+
+# Every inline kernel of vector.pxd, callable from Python with vectors as
+# 2-sequences, boxes as 4-sequences and transforms as 6-sequences, for the
+# tests that check the C arithmetic bit for bit.
+cdef inline cpVect _cv(object o) except *:
+    return cpv_from_object(o)
+
+cdef inline cpBB _cb(object o) except *:
+    return cpbb_from_object(o)
+
+cdef inline cpTransform _ct(object o) except *:
+    return cptransform_from_object(o)
+
+cdef object _m2(cpMat2x2 m):
+    return (m.a, m.b, m.c, m.d)
+
+_KERNELS = {
+    "cpfmax": lambda a, b: cpfmax(a, b),
+    "cpfmin": lambda a, b: cpfmin(a, b),
+    "cpfabs": lambda f: cpfabs(f),
+    "cpfclamp": lambda f, lo, hi: cpfclamp(f, lo, hi),
+    "cpfclamp01": lambda f: cpfclamp01(f),
+    "cpflerp": lambda f1, f2, t: cpflerp(f1, f2, t),
+    "cpflerpconst": lambda f1, f2, d: cpflerpconst(f1, f2, d),
+    "cpv": lambda x, y: vec2d_from_cpv(cpv(x, y)),
+    "cpvzero": lambda: vec2d_from_cpv(cpvzero()),
+    "VECT_ERR": lambda: vec2d_from_cpv(VECT_ERR()),
+    "cpveql": lambda a, b: bool(cpveql(_cv(a), _cv(b))),
+    "cpvadd": lambda a, b: vec2d_from_cpv(cpvadd(_cv(a), _cv(b))),
+    "cpvsub": lambda a, b: vec2d_from_cpv(cpvsub(_cv(a), _cv(b))),
+    "cpvneg": lambda a: vec2d_from_cpv(cpvneg(_cv(a))),
+    "cpvmult": lambda a, s: vec2d_from_cpv(cpvmult(_cv(a), s)),
+    "cpvdot": lambda a, b: cpvdot(_cv(a), _cv(b)),
+    "cpvcross": lambda a, b: cpvcross(_cv(a), _cv(b)),
+    "cpvperp": lambda a: vec2d_from_cpv(cpvperp(_cv(a))),
+    "cpvrperp": lambda a: vec2d_from_cpv(cpvrperp(_cv(a))),
+    "cpvproject": lambda a, b: vec2d_from_cpv(cpvproject(_cv(a), _cv(b))),
+    "cpvforangle": lambda a: vec2d_from_cpv(cpvforangle(a)),
+    "cpvtoangle": lambda a: cpvtoangle(_cv(a)),
+    "cpvrotate": lambda a, b: vec2d_from_cpv(cpvrotate(_cv(a), _cv(b))),
+    "cpvunrotate": lambda a, b: vec2d_from_cpv(cpvunrotate(_cv(a), _cv(b))),
+    "cpvlengthsq": lambda a: cpvlengthsq(_cv(a)),
+    "cpvlength": lambda a: cpvlength(_cv(a)),
+    "cpvlerp": lambda a, b, t: vec2d_from_cpv(cpvlerp(_cv(a), _cv(b), t)),
+    "cpvnormalize": lambda a: vec2d_from_cpv(cpvnormalize(_cv(a))),
+    "cpvslerp": lambda a, b, t: vec2d_from_cpv(cpvslerp(_cv(a), _cv(b), t)),
+    "cpvslerpconst": lambda a, b, t: vec2d_from_cpv(cpvslerpconst(_cv(a), _cv(b), t)),
+    "cpvclamp": lambda a, l: vec2d_from_cpv(cpvclamp(_cv(a), l)),
+    "cpvlerpconst": lambda a, b, d: vec2d_from_cpv(cpvlerpconst(_cv(a), _cv(b), d)),
+    "cpvdist": lambda a, b: cpvdist(_cv(a), _cv(b)),
+    "cpvdistsq": lambda a, b: cpvdistsq(_cv(a), _cv(b)),
+    "cpvnear": lambda a, b, d: bool(cpvnear(_cv(a), _cv(b), d)),
+    "cpMat2x2New": lambda a, b, c, d: _m2(cpMat2x2New(a, b, c, d)),
+    "cpMat2x2Transform": lambda m, v: vec2d_from_cpv(
+        cpMat2x2Transform(cpMat2x2New(m[0], m[1], m[2], m[3]), _cv(v))),
+    "cpClosetPointOnSegment": lambda p, a, b: vec2d_from_cpv(
+        cpClosetPointOnSegment(_cv(p), _cv(a), _cv(b))),
+    "cpBBNew": lambda l, b, r, t: bb_from_cpbb(cpBBNew(l, b, r, t)),
+    "cpBBNewForExtents": lambda c, hw, hh: bb_from_cpbb(cpBBNewForExtents(_cv(c), hw, hh)),
+    "cpBBNewForCircle": lambda p, r: bb_from_cpbb(cpBBNewForCircle(_cv(p), r)),
+    "cpBBIntersects": lambda a, b: bool(cpBBIntersects(_cb(a), _cb(b))),
+    "cpBBContainsBB": lambda a, b: bool(cpBBContainsBB(_cb(a), _cb(b))),
+    "cpBBContainsVect": lambda bb, v: bool(cpBBContainsVect(_cb(bb), _cv(v))),
+    "cpBBMerge": lambda a, b: bb_from_cpbb(cpBBMerge(_cb(a), _cb(b))),
+    "cpBBExpand": lambda bb, v: bb_from_cpbb(cpBBExpand(_cb(bb), _cv(v))),
+    "cpBBCenter": lambda bb: vec2d_from_cpv(cpBBCenter(_cb(bb))),
+    "cpBBArea": lambda bb: cpBBArea(_cb(bb)),
+    "cpBBMergedArea": lambda a, b: cpBBMergedArea(_cb(a), _cb(b)),
+    "cpBBSegmentQuery": lambda bb, a, b: cpBBSegmentQuery(_cb(bb), _cv(a), _cv(b)),
+    "cpBBIntersectsSegment": lambda bb, a, b: bool(cpBBIntersectsSegment(_cb(bb), _cv(a), _cv(b))),
+    "cpBBClampVect": lambda bb, v: vec2d_from_cpv(cpBBClampVect(_cb(bb), _cv(v))),
+    "cpBBWrapVect": lambda bb, v: vec2d_from_cpv(cpBBWrapVect(_cb(bb), _cv(v))),
+    "cpBBOffset": lambda bb, v: bb_from_cpbb(cpBBOffset(_cb(bb), _cv(v))),
+    "cpTransformNew": lambda a, b, c, d, tx, ty: transform_from_cp(cpTransformNew(a, b, c, d, tx, ty)),
+    "cpTransformNewTranspose": lambda a, c, tx, b, d, ty: transform_from_cp(
+        cpTransformNewTranspose(a, c, tx, b, d, ty)),
+    "cpTransformIdentity": lambda: transform_from_cp(cpTransformIdentity()),
+    "cpTransformInverse": lambda t: transform_from_cp(cpTransformInverse(_ct(t))),
+    "cpTransformMult": lambda t1, t2: transform_from_cp(cpTransformMult(_ct(t1), _ct(t2))),
+    "cpTransformPoint": lambda t, p: vec2d_from_cpv(cpTransformPoint(_ct(t), _cv(p))),
+    "cpTransformVect": lambda t, v: vec2d_from_cpv(cpTransformVect(_ct(t), _cv(v))),
+    "cpTransformbBB": lambda t, bb: bb_from_cpbb(cpTransformbBB(_ct(t), _cb(bb))),
+    "cpTransformTranslate": lambda v: transform_from_cp(cpTransformTranslate(_cv(v))),
+    "cpTransformScale": lambda sx, sy: transform_from_cp(cpTransformScale(sx, sy)),
+    "cpTransformRotate": lambda a: transform_from_cp(cpTransformRotate(a)),
+    "cpTransformRigid": lambda v, a: transform_from_cp(cpTransformRigid(_cv(v), a)),
+    "cpTransformRigidInverse": lambda t: transform_from_cp(cpTransformRigidInverse(_ct(t))),
+    "cpTransformWrap": lambda o, i: transform_from_cp(cpTransformWrap(_ct(o), _ct(i))),
+    "cpTransformWrapInverse": lambda o, i: transform_from_cp(cpTransformWrapInverse(_ct(o), _ct(i))),
+}
+
+
+def _kernel(name, *args):
+    """Call the inline C kernel ``name`` of vector.pxd (a testing hook).
+
+    >>> _kernel("cpvadd", (1, 2), (0.5, 0.5))
+    Vec2d(1.5, 2.5)
+    >>> _kernel("cpvnormalize", (0, 0))
+    Vec2d(0.0, 0.0)
+    """
+    return _KERNELS[name](*args)

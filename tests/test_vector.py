@@ -511,3 +511,244 @@ def test_transform_defaults_and_errors():
 def test_exports():
     assert tamias2d.Vec2d is Vec2d and tamias2d.BB is BB and tamias2d.Transform is Transform
     assert Vec2d.__module__ == "tamias2d.vector"
+
+
+# -- the C kernels of vector.pxd ------------------------------------------------------
+#
+# The BB kernels are compared with Chipmunk itself (pymunk's compiled library
+# exports them). The vector and transform kernels are not exported by pymunk,
+# so they are compared with the C expressions evaluated in Python floats
+# (IEEE doubles, same libm), written with the C association.
+
+from pymunk._chipmunk_cffi import lib as cp_lib  # noqa: E402
+
+DBL_MIN = 2.2250738585072014e-308
+
+
+def _div(a, b):
+    """C division of doubles (no ZeroDivisionError)."""
+    with np.errstate(all="ignore"):
+        return float(np.float64(a) / np.float64(b))
+
+
+def _cos(a):
+    return math.nan if math.isinf(a) else math.cos(a)
+
+
+def _sin(a):
+    return math.nan if math.isinf(a) else math.sin(a)
+
+
+def _acos(a):
+    return math.acos(a) if -1.0 <= a <= 1.0 else math.nan
+
+
+def r_fmax(a, b): return a if a > b else b
+def r_fmin(a, b): return a if a < b else b
+def r_fabs(f): return -f if f < 0 else f
+def r_fclamp(f, lo, hi): return r_fmin(r_fmax(f, lo), hi)
+def r_fclamp01(f): return r_fmax(0.0, r_fmin(f, 1.0))
+def r_add(a, b): return (a[0] + b[0], a[1] + b[1])
+def r_sub(a, b): return (a[0] - b[0], a[1] - b[1])
+def r_mult(v, s): return (v[0] * s, v[1] * s)
+def r_dot(a, b): return a[0] * b[0] + a[1] * b[1]
+def r_length(v): return math.sqrt(r_dot(v, v))
+def r_lerp(a, b, t): return r_add(r_mult(a, 1.0 - t), r_mult(b, t))
+def r_normalize(v): return r_mult(v, _div(1.0, r_length(v) + DBL_MIN))
+def r_forangle(a): return (_cos(a), _sin(a))
+
+
+def r_slerp(a, b, t):
+    omega = _acos(r_fclamp(r_dot(r_normalize(a), r_normalize(b)), -1.0, 1.0))
+    if omega < 1e-3:
+        return r_lerp(a, b, t)
+    denom = _div(1.0, _sin(omega))
+    return r_add(r_mult(a, _sin((1.0 - t) * omega) * denom), r_mult(b, _sin(t * omega) * denom))
+
+
+def r_slerpconst(a, b, angle):
+    omega = _acos(r_fclamp(r_dot(r_normalize(a), r_normalize(b)), -1.0, 1.0))
+    return r_slerp(a, b, _div(r_fmin(angle, omega), omega))
+
+
+def r_clamp(v, length):
+    return r_mult(r_normalize(v), length) if r_dot(v, v) > length * length else v
+
+
+def r_bbcenter(bb): return r_lerp((bb[0], bb[1]), (bb[2], bb[3]), 0.5)
+def r_extents(c, hw, hh): return (c[0] - hw, c[1] - hh, c[0] + hw, c[1] + hh)
+def r_tt(a, c, tx, b, d, ty): return (a, b, c, d, tx, ty)
+def r_tpoint(t, p): return (t[0] * p[0] + t[2] * p[1] + t[4], t[1] * p[0] + t[3] * p[1] + t[5])
+
+
+def r_tinverse(t):
+    a, b, c, d, tx, ty = t
+    inv = _div(1.0, a * d - c * b)
+    return r_tt(d * inv, -c * inv, (c * ty - tx * d) * inv, -b * inv, a * inv, (tx * b - a * ty) * inv)
+
+
+def r_tmult(t1, t2):
+    a1, b1, c1, d1, tx1, ty1 = t1
+    a2, b2, c2, d2, tx2, ty2 = t2
+    return r_tt(a1 * a2 + c1 * b2, a1 * c2 + c1 * d2, a1 * tx2 + c1 * ty2 + tx1,
+                b1 * a2 + d1 * b2, b1 * c2 + d1 * d2, b1 * tx2 + d1 * ty2 + ty1)
+
+
+def r_tbbb(t, bb):
+    center = r_bbcenter(bb)
+    hw = (bb[2] - bb[0]) * 0.5
+    hh = (bb[3] - bb[1]) * 0.5
+    a, b, d, e = t[0] * hw, t[2] * hh, t[1] * hw, t[3] * hh
+    return r_extents(r_tpoint(t, center), r_fmax(r_fabs(a + b), r_fabs(a - b)),
+                     r_fmax(r_fabs(d + e), r_fabs(d - e)))
+
+
+def r_rotate_t(angle):
+    rx, ry = r_forangle(angle)
+    return r_tt(rx, -ry, 0.0, ry, rx, 0.0)
+
+
+def r_rigid(rot, v):
+    return r_tt(rot[0], -rot[1], v[0], rot[1], rot[0], v[1])
+
+
+def r_closest(p, a, b):
+    delta = r_sub(a, b)
+    t = r_fclamp01(_div(r_dot(delta, r_sub(p, b)), r_dot(delta, delta)))
+    return r_add(b, r_mult(delta, t))
+
+
+# name -> (argument kinds, reference); kinds: s scalar, v vector, b box, t transform, m 2x2
+KERNEL_REFERENCES = {
+    "cpfmax": ("ss", r_fmax),
+    "cpfmin": ("ss", r_fmin),
+    "cpfabs": ("s", r_fabs),
+    "cpfclamp": ("sss", r_fclamp),
+    "cpfclamp01": ("s", r_fclamp01),
+    "cpflerp": ("sss", lambda f1, f2, t: f1 * (1.0 - t) + f2 * t),
+    "cpflerpconst": ("sss", lambda f1, f2, d: f1 + r_fclamp(f2 - f1, -d, d)),
+    "cpv": ("ss", lambda x, y: (x, y)),
+    "cpveql": ("vv", lambda a, b: a[0] == b[0] and a[1] == b[1]),
+    "cpvadd": ("vv", r_add),
+    "cpvsub": ("vv", r_sub),
+    "cpvneg": ("v", lambda v: (-v[0], -v[1])),
+    "cpvmult": ("vs", r_mult),
+    "cpvdot": ("vv", r_dot),
+    "cpvcross": ("vv", lambda a, b: a[0] * b[1] - a[1] * b[0]),
+    "cpvperp": ("v", lambda v: (-v[1], v[0])),
+    "cpvrperp": ("v", lambda v: (v[1], -v[0])),
+    "cpvproject": ("vv", lambda a, b: r_mult(b, _div(r_dot(a, b), r_dot(b, b)))),
+    "cpvforangle": ("s", r_forangle),
+    "cpvtoangle": ("v", lambda v: math.atan2(v[1], v[0])),
+    "cpvrotate": ("vv", lambda a, b: (a[0] * b[0] - a[1] * b[1], a[0] * b[1] + a[1] * b[0])),
+    "cpvunrotate": ("vv", lambda a, b: (a[0] * b[0] + a[1] * b[1], a[1] * b[0] - a[0] * b[1])),
+    "cpvlengthsq": ("v", lambda v: r_dot(v, v)),
+    "cpvlength": ("v", r_length),
+    "cpvlerp": ("vvs", r_lerp),
+    "cpvnormalize": ("v", r_normalize),
+    "cpvslerp": ("vvs", r_slerp),
+    "cpvslerpconst": ("vvs", r_slerpconst),
+    "cpvclamp": ("vs", r_clamp),
+    "cpvlerpconst": ("vvs", lambda a, b, d: r_add(a, r_clamp(r_sub(b, a), d))),
+    "cpvdist": ("vv", lambda a, b: r_length(r_sub(a, b))),
+    "cpvdistsq": ("vv", lambda a, b: r_dot(r_sub(a, b), r_sub(a, b))),
+    "cpvnear": ("vvs", lambda a, b, d: r_dot(r_sub(a, b), r_sub(a, b)) < d * d),
+    "cpMat2x2New": ("ssss", lambda a, b, c, d: (a, b, c, d)),
+    "cpMat2x2Transform": ("mv", lambda m, v: (v[0] * m[0] + v[1] * m[1], v[0] * m[2] + v[1] * m[3])),
+    "cpClosetPointOnSegment": ("vvv", r_closest),
+    "cpTransformNew": ("ssssss", lambda *t: t),
+    "cpTransformNewTranspose": ("ssssss", r_tt),
+    "cpTransformIdentity": ("", lambda: (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)),
+    "cpTransformInverse": ("t", r_tinverse),
+    "cpTransformMult": ("tt", r_tmult),
+    "cpTransformPoint": ("tv", r_tpoint),
+    "cpTransformVect": ("tv", lambda t, v: (t[0] * v[0] + t[2] * v[1], t[1] * v[0] + t[3] * v[1])),
+    "cpTransformbBB": ("tb", r_tbbb),
+    "cpTransformTranslate": ("v", lambda v: r_tt(1.0, 0.0, v[0], 0.0, 1.0, v[1])),
+    "cpTransformScale": ("ss", lambda sx, sy: r_tt(sx, 0.0, 0.0, 0.0, sy, 0.0)),
+    "cpTransformRotate": ("s", r_rotate_t),
+    "cpTransformRigid": ("vs", lambda v, a: r_rigid(r_forangle(a), v)),
+    "cpTransformRigidInverse": ("t", lambda t: r_tt(t[3], -t[2], (t[2] * t[5] - t[4] * t[3]),
+                                                    -t[1], t[0], (t[4] * t[1] - t[0] * t[5]))),
+    "cpTransformWrap": ("tt", lambda o, i: r_tmult(r_tinverse(o), r_tmult(i, o))),
+    "cpTransformWrapInverse": ("tt", lambda o, i: r_tmult(o, r_tmult(i, r_tinverse(o)))),
+}
+
+# The BB kernels against Chipmunk's own compiled functions.
+BB_KERNELS = {
+    "cpBBNew": "ssss", "cpBBNewForExtents": "vss", "cpBBNewForCircle": "vs",
+    "cpBBIntersects": "bb", "cpBBContainsBB": "bb", "cpBBContainsVect": "bv",
+    "cpBBMerge": "bb", "cpBBExpand": "bv", "cpBBCenter": "b", "cpBBArea": "b",
+    "cpBBMergedArea": "bb", "cpBBSegmentQuery": "bvv", "cpBBIntersectsSegment": "bvv",
+    "cpBBClampVect": "bv", "cpBBWrapVect": "bv", "cpBBOffset": "bv",
+}
+
+floats = st.one_of(st.floats(-1e6, 1e6), st.floats(),
+                   st.sampled_from([0.0, -0.0, 1.0, -1.0, 1e-3, math.inf, -math.inf, math.nan]))
+_KIND_SIZES = {"s": 0, "v": 2, "b": 4, "t": 6, "m": 4}
+
+
+def _args(draw, kinds):
+    args = []
+    for kind in kinds:
+        if kind == "s":
+            args.append(draw(floats))
+        else:
+            args.append(tuple(draw(floats) for _ in range(_KIND_SIZES[kind])))
+    return args
+
+
+def _as_plain(x):
+    """Kernel results as tuples of floats (or a bool / float)."""
+    if isinstance(x, tuple):
+        return tuple(x)
+    return x
+
+
+def _cp_result(x):
+    if isinstance(x, (bool, float, int)):
+        return x
+    if hasattr(x, "l"):
+        return (x.l, x.b, x.r, x.t)
+    return (x.x, x.y)
+
+
+def test_every_kernel_is_checked():
+    assert set(tvector._KERNELS) == (set(KERNEL_REFERENCES) | set(BB_KERNELS)
+                                     | {"cpvzero", "VECT_ERR"})
+
+
+@pytest.mark.parametrize("name", sorted(KERNEL_REFERENCES))
+@SETTINGS
+@given(data=st.data())
+def test_kernel_matches_c_expression(name, data):
+    kinds, ref = KERNEL_REFERENCES[name]
+    args = _args(data.draw, kinds)
+    ours = _as_plain(tvector._kernel(name, *args))
+    expected = ref(*args)
+    if isinstance(expected, bool):
+        assert ours is expected, f"{name}{tuple(args)}"
+    else:
+        assert_same(ours, expected, f"{name}{tuple(args)}")
+
+
+@pytest.mark.parametrize("name", sorted(BB_KERNELS))
+@SETTINGS
+@given(data=st.data())
+def test_bb_kernel_matches_chipmunk(name, data):
+    args = _args(data.draw, BB_KERNELS[name])
+    ours = _as_plain(tvector._kernel(name, *args))
+    theirs = _cp_result(getattr(cp_lib, name)(*args))
+    if isinstance(ours, bool):
+        assert ours == bool(theirs), f"{name}{tuple(args)}"
+    else:
+        assert_same(ours, theirs, f"{name}{tuple(args)}")
+
+
+def test_mis_constants():
+    zero, err, pi = tvector._mis_constants()
+    assert_same(zero, Vec2d(0.0, 0.0))
+    assert_same(err, Vec2d(2147483647.0, -2147483648.0))
+    assert pi == math.pi
+    assert_same(tvector._kernel("cpvzero"), Vec2d(0.0, 0.0))
+    assert_same(tvector._kernel("VECT_ERR"), err)
