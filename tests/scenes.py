@@ -284,6 +284,37 @@ def add_remove(mod):
     return space
 
 
+def type_changes(mod):
+    """The add_remove scene, plus a sensor and bodies switching between
+    dynamic, kinematic and static while in contact."""
+    space = add_remove(mod)
+    list(space.shapes)[5].sensor = True
+    base_hook = space.scene_hook
+
+    def hook(step):
+        base_hook(step)
+        bodies = list(space.bodies)
+        if step == 100:
+            bodies[2].body_type = mod.Body.KINEMATIC
+            bodies[2].velocity = (5, 0)
+        if step == 150:
+            bodies[3].body_type = mod.Body.STATIC
+        if step == 200:
+            bodies[2].body_type = mod.Body.DYNAMIC
+            bodies[2].mass = 1
+            bodies[2].moment = 30
+        if step == 260:
+            bodies[3].body_type = mod.Body.DYNAMIC
+            bodies[3].mass = 2
+            bodies[3].moment = 50
+        if step == 300:
+            bodies[4].body_type = mod.Body.STATIC
+            space.reindex_shapes_for_body(bodies[4])
+
+    space.scene_hook = hook
+    return space
+
+
 SCENES = {
     "circles_on_segment": Scene(circles_on_segment, 1.0 / 60.0, 600),
     "pyramid_20": Scene(pyramid, 1.0 / 60.0, 600),
@@ -292,4 +323,5 @@ SCENES = {
     "drum": Scene(drum, 1.0 / 60.0, 600),
     "mixed": Scene(mixed, 1.0 / 60.0, 600),
     "add_remove": Scene(add_remove, 1.0 / 60.0, 600),
+    "type_changes": Scene(type_changes, 1.0 / 60.0, 500),
 }

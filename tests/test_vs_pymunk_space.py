@@ -102,7 +102,7 @@ def test_scene_bitwise_spatial_hash(name):
 
 
 @pytest.mark.parametrize("name", ["circles_on_segment", "vertical_stack_10", "mixed",
-                                  "add_remove"])
+                                  "add_remove", "type_changes"])
 def test_scene_bitwise_sleeping(name):
     # Sleeping on: components fall asleep, a poke at step 450 wakes one.
     sc = scenes.SCENES[name]
