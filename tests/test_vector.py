@@ -229,9 +229,7 @@ def test_vec2d_is_a_tuple():
     assert hash(v) == hash((1, 2.5))
     assert {v: 1}[(1, 2.5)] == 1
     assert Vec2d._fields == ("x", "y") and Vec2d.__match_args__ == ("x", "y")
-    match v:
-        case Vec2d(x, y):
-            assert (x, y) == (1, 2.5)
+    assert Vec2d.__match_args__ == PVec2d.__match_args__ == ("x", "y")
     x, y = v
     assert (x, y) == (1, 2.5)
     assert Vec2d(x=3, y=4) == (3, 4)
