@@ -440,8 +440,9 @@ cdef class Arbiter:
             cps.points[i].pointB = cpv_from_object(points[i].point_b)
             cps.points[i].distance = points[i].distance
         cps.normal = normal
-        # The point count was checked above against the same arbiter.
-        cpArbiterSetContactPointSet(arb, &cps)
+        if not cpArbiterSetContactPointSet(arb, &cps):
+            # Only in a separate callback: the arbiter has no contacts to set.
+            raise ValueError("The number of contact points cannot be changed.")
 
     @property
     def bodies(self):
