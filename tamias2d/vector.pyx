@@ -348,7 +348,7 @@ class Vec2d(tuple):
         """
         cdef tuple items = tuple(iterable)
         if len(items) != 2:
-            raise TypeError(f"Expected 2 arguments, got {len(items)}")
+            raise TypeError(f"a Vec2d takes 2 items, got {len(items)}")
         return _new_tuple(cls, _Vec2d, items)
 
     def _replace(self, **changes):
@@ -361,7 +361,7 @@ class Vec2d(tuple):
         x = changes.pop("x", t[0])
         y = changes.pop("y", t[1])
         if changes:
-            raise ValueError(f"Got unexpected field names: {list(changes)!r}")
+            raise ValueError(f"no such field(s): {list(changes)!r}")
         return _new_tuple(type(self), _Vec2d, (x, y))
 
     def _asdict(self):
@@ -538,7 +538,7 @@ class Vec2d(tuple):
         """
         # stacklevel 1: a compiled method has no frame of its own, so level 1
         # already names the caller's line.
-        _warnings.warn("Vec2d.get_length_sqrd() is deprecated. Use Vec2d.length_squared instead.",
+        _warnings.warn("get_length_sqrd() is deprecated: read the length_squared property",
                        DeprecationWarning, stacklevel=1)
         cdef tuple t = _self_items(self, 2, "Vec2d")
         return _len_sq(t)
@@ -723,7 +723,7 @@ class Vec2d(tuple):
         ...     Vec2d(1, 1).get_dist_sqrd((4, 5))
         25
         """
-        _warnings.warn("get_dist_sqrd() is deprecated. Use get_distance_squared() instead.",
+        _warnings.warn("get_dist_sqrd() is deprecated: call get_distance_squared()",
                        DeprecationWarning, stacklevel=1)
         cdef tuple t = _self_items(self, 2, "Vec2d")
         cdef tuple o = _pair(other)
@@ -891,7 +891,7 @@ class BB(tuple):
         """
         cdef tuple items = tuple(iterable)
         if len(items) != 4:
-            raise TypeError(f"Expected 4 arguments, got {len(items)}")
+            raise TypeError(f"a BB takes 4 items, got {len(items)}")
         return _new_tuple(cls, _BB, items)
 
     def _replace(self, **changes):
@@ -903,7 +903,7 @@ class BB(tuple):
         cdef tuple t = _self_items(self, 4, "BB")
         items = tuple([changes.pop(name, t[i]) for i, name in enumerate(BB._fields)])
         if changes:
-            raise ValueError(f"Got unexpected field names: {list(changes)!r}")
+            raise ValueError(f"no such field(s): {list(changes)!r}")
         return _new_tuple(type(self), _BB, items)
 
     def _asdict(self):
@@ -1082,7 +1082,7 @@ class Transform(tuple):
         """
         cdef tuple items = tuple(iterable)
         if len(items) != 6:
-            raise TypeError(f"Expected 6 arguments, got {len(items)}")
+            raise TypeError(f"a Transform takes 6 items, got {len(items)}")
         return _new_tuple(cls, _Transform, items)
 
     def _replace(self, **changes):
@@ -1094,7 +1094,7 @@ class Transform(tuple):
         cdef tuple t = _self_items(self, 6, "Transform")
         items = tuple([changes.pop(name, t[i]) for i, name in enumerate(Transform._fields)])
         if changes:
-            raise ValueError(f"Got unexpected field names: {list(changes)!r}")
+            raise ValueError(f"no such field(s): {list(changes)!r}")
         return _new_tuple(type(self), _Transform, items)
 
     def _asdict(self):
@@ -1204,13 +1204,13 @@ class Transform(tuple):
         >>> Transform(1, 1, 1, 1).inverted()
         Traceback (most recent call last):
         ...
-        ValueError: Singular transform cannot be inverted
+        ValueError: the transform is singular (determinant 0) and has no inverse
         """
         cdef tuple t = _self_items(self, 6, "Transform")
         a, b, c, d, tx, ty = t
         det = _sub(_mul(a, d), _mul(b, c))
         if det == 0:
-            raise ValueError("Singular transform cannot be inverted")
+            raise ValueError("the transform is singular (determinant 0) and has no inverse")
         return _new_tuple(_Transform, _Transform, (
             _div(d, det),
             _div(_neg(b), det),

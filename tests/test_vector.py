@@ -496,7 +496,7 @@ def test_transform_defaults_and_errors():
     assert Transform._fields == PTransform._fields
     assert Transform._field_defaults == PTransform._field_defaults
     assert Transform.__mro__ == (Transform, tuple, object)
-    with pytest.raises(ValueError, match="Singular"):
+    with pytest.raises(ValueError, match="singular"):
         Transform(1, 2, 2, 4).inverted()
     for bad in ((1, 2, 3), BB(), []):
         with pytest.raises(IllegalVector) as info:
