@@ -4,7 +4,8 @@
 # _structs.pxd.
 from tamias2d._config cimport cpFloat, cpBool, cpCollisionType, cpCollisionID, cpTimestamp
 from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact,
-    cpCollisionHandler, cpPostStepCallback, cpPostStepFunc, cpConstraint)
+    cpCollisionHandler, cpPostStepCallback, cpPostStepFunc, cpConstraint,
+    cpSpatialIndexIteratorFunc)
 from tamias2d.vector cimport cpVect
 from tamias2d.body cimport Body
 from tamias2d.shape cimport Shape
@@ -33,6 +34,13 @@ cdef void cpSpaceRemoveBody(cpSpace *space, cpBody *body) noexcept nogil
 cdef void cpSpaceReindexStatic(cpSpace *space) noexcept nogil
 cdef void cpSpaceReindexShape(cpSpace *space, cpShape *shape) noexcept nogil
 cdef void cpSpaceReindexShapesForBody(cpSpace *space, cpBody *body) noexcept nogil
+
+# -- iteration (locked; the callbacks must not add or remove objects) ----------------------
+ctypedef void (*cpSpaceBodyIteratorFunc)(cpBody *body, void *data) noexcept nogil
+# Dynamic bodies, static bodies, then each sleeping component.
+cdef void cpSpaceEachBody(cpSpace *space, cpSpaceBodyIteratorFunc func, void *data) noexcept nogil
+# Dynamic tree, then static tree, each in leaf-set order.
+cdef void cpSpaceEachShape(cpSpace *space, cpSpatialIndexIteratorFunc func, void *data) noexcept nogil
 
 # -- locking and post-step callbacks (cpSpaceStep.c) ----------------------------------
 cdef void cpSpaceLock(cpSpace *space) noexcept nogil

@@ -192,9 +192,6 @@ cdef void cpSpaceSetStaticBody(cpSpace *space, cpBody *body) noexcept nogil:
     space.staticBody = body
     body.space = space
 
-cdef void _activateWrap(cpBody *body) noexcept nogil:
-    cpBodyActivate(body)
-
 cdef void cpSpaceDestroy(cpSpace *space) noexcept nogil:
     # Munk2D wakes every body first so that sleeping arbiters give their heap
     # contacts back; here the Python layer has already removed every object.
@@ -379,8 +376,6 @@ cdef void cpSpaceRemoveBody(cpSpace *space, cpBody *body) noexcept nogil:
 
 
 # -- iteration ----------------------------------------------------------------------------
-
-ctypedef void (*cpSpaceBodyIteratorFunc)(cpBody *body, void *data) noexcept nogil
 
 cdef void cpSpaceEachBody(cpSpace *space, cpSpaceBodyIteratorFunc func, void *data) noexcept nogil:
     cdef int i
