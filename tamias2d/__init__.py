@@ -18,3 +18,4 @@ from .vector import Vec2d, BB, Transform
 from .collision import ContactPoint, ContactPointSet
 from .arbiter import Arbiter
 from .space import Space, empty_callback
+from . import batch
