@@ -1,0 +1,194 @@
+"""Shared pieces of the benchmark runner: finding the engines, timing,
+progress display, machine description.
+
+The runner is started as ``python benchmarks/run.py`` from anywhere. tamias2d
+is imported as installed; only when that fails is the checkout that holds
+this file put on ``sys.path`` (an installed package must win over a source
+folder without compiled modules). ``tests/scenes.py`` of the same checkout
+provides the scenes shared with the cross-validation tests.
+"""
+import importlib
+import math
+import os
+import platform
+import statistics
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+
+
+def import_engines():
+    """(tamias2d, pymunk), importing tamias2d from the checkout if it is not
+    installed."""
+    try:
+        import tamias2d
+    except ImportError:
+        sys.path.insert(0, ROOT)
+        for name in [m for m in sys.modules if m == "tamias2d" or m.startswith("tamias2d.")]:
+            del sys.modules[name]
+        import tamias2d
+    import tamias2d.batch  # noqa: F401
+    import pymunk
+    import pymunk.batch  # noqa: F401
+    return tamias2d, pymunk
+
+
+def import_scenes():
+    """tests/scenes.py of this checkout (the scene builders both engines share)."""
+    tests = os.path.join(ROOT, "tests")
+    if tests not in sys.path:
+        sys.path.insert(0, tests)
+    return importlib.import_module("scenes")
+
+
+ENGINES = ("pymunk", "tamias2d")
+
+
+def median(xs):
+    return statistics.median(xs)
+
+
+def ratio(t_tamias, t_pymunk):
+    """tamias2d time / pymunk time (below 1: tamias2d is faster)."""
+    if t_tamias is None or t_pymunk is None or not t_pymunk > 0:
+        return None
+    return t_tamias / t_pymunk
+
+
+def alternate(funcs, repeat):
+    """Call every function of `funcs` (engine -> f() returning seconds)
+    `repeat` times, switching which engine goes first at every round;
+    engine -> list of times."""
+    times = {name: [] for name in funcs}
+    order = list(funcs)
+    for r in range(repeat):
+        for name in (order if r % 2 == 0 else order[::-1]):
+            times[name].append(funcs[name]())
+    return times
+
+
+def timed(func, number=1):
+    """Seconds per call of func() over `number` calls."""
+    t0 = time.perf_counter()
+    for _ in range(number):
+        func()
+    return (time.perf_counter() - t0) / number
+
+
+def step_block(space, dt, steps):
+    """Seconds per step over `steps` steps."""
+    step = space.step
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        step(dt)
+    return (time.perf_counter() - t0) / steps
+
+
+def same_state(a, b):
+    """True when two spaces' bodies have bitwise equal positions, angles and
+    velocities (the two engines ran the same simulation)."""
+    sa = [(tuple(x.position), x.angle, tuple(x.velocity), x.angular_velocity) for x in a.bodies]
+    sb = [(tuple(x.position), x.angle, tuple(x.velocity), x.angular_velocity) for x in b.bodies]
+    return sa == sb
+
+
+def finite(x):
+    return isinstance(x, (int, float)) and math.isfinite(x)
+
+
+class Progress:
+    """One status line on stderr: rewritten in place on a terminal, printed
+    as plain lines otherwise (logs, CI)."""
+
+    def __init__(self, total, stream=None, enabled=True):
+        self.stream = stream if stream is not None else sys.stderr
+        self.total = total
+        self.done = 0
+        self.enabled = enabled
+        self.tty = enabled and hasattr(self.stream, "isatty") and self.stream.isatty()
+        self.t0 = time.perf_counter()
+        self._width = 0
+
+    def _line(self, text):
+        elapsed = time.perf_counter() - self.t0
+        return f"[{self.done}/{self.total} {elapsed:5.0f}s] {text}"
+
+    def start(self, text):
+        """Show what runs now."""
+        if not self.enabled:
+            return
+        line = self._line(text)
+        if self.tty:
+            cols = _terminal_columns(self.stream)
+            line = line[:cols - 1]
+            self.stream.write("\r" + line + "\x1b[K")
+        else:
+            self.stream.write(line + "\n")
+        self.stream.flush()
+
+    def advance(self, n=1):
+        self.done += n
+
+    def note(self, text):
+        """A line that stays (a finished item's result)."""
+        if not self.enabled:
+            return
+        if self.tty:
+            self.stream.write("\r\x1b[K" + text + "\n")
+        else:
+            self.stream.write(text + "\n")
+        self.stream.flush()
+
+    def finish(self):
+        if self.enabled and self.tty:
+            self.stream.write("\r\x1b[K")
+            self.stream.flush()
+
+
+def _terminal_columns(stream):
+    try:
+        return os.get_terminal_size(stream.fileno()).columns
+    except (OSError, AttributeError, ValueError):
+        return 100
+
+
+def cpu_model():
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def machine_info(tamias2d, pymunk):
+    import numpy
+    info = {
+        "cpu": cpu_model(),
+        "logical_cpus": os.cpu_count(),
+        "python": sys.version.split()[0],
+        "python_implementation": platform.python_implementation(),
+        "platform": platform.platform(),
+        "tamias2d": tamias2d.version,
+        "pymunk": pymunk.version,
+        "chipmunk_of_pymunk": getattr(pymunk, "chipmunk_version", "?"),
+        "numpy": numpy.__version__,
+    }
+    try:
+        import Cython
+        info["cython"] = Cython.__version__
+    except ImportError:
+        pass
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemTotal"):
+                    info["memory_kb"] = int(line.split()[1])
+                    break
+    except OSError:
+        pass
+    return info
