@@ -956,14 +956,17 @@ cdef cpFloat _radius_arg(object value, str what) except? -1.0:
     return r
 
 cdef cpFloat _nonneg_arg(object value, str what) except? -1.0:
-    # >= 0, infinity allowed (infinite friction is a known idiom); NaN refused.
+    # Finite and >= 0. Infinity is refused too: the solver multiplies these
+    # coefficients (u = ua*ub, e = ea*eb, jtMax = u*jn, bounce = e*vrn), and
+    # inf*0 makes the NaN that then reaches the body state.
     cdef cpFloat x
     try:
         x = value
     except TypeError:
         raise TypeError(f"{what} must be a number, not {type(value).__name__}") from None
-    if not (x >= 0.0):
-        raise IllegalShape(f"{what} must be >= 0, got {value!r}")
+    if not (x >= 0.0 and x < INFINITY):
+        raise IllegalShape(f"{what} must be a finite number >= 0 (use a large value such as "
+                           f"1e9 rather than infinity), got {value!r}")
     return x
 
 cdef cpFloat _mass_arg(object value, str what) except? -1.0:
@@ -1040,6 +1043,17 @@ cdef int _check_transform_finite(const cpTransform *t) except -1:
             and isfinite(t.tx) and isfinite(t.ty)):
         raise IllegalShape("transform must have finite components")
     return 0
+
+
+cdef object _snapshot_module = None
+
+cdef object _snapshot():
+    # Lazy upward import: copy and pickle live above the space.
+    global _snapshot_module
+    if _snapshot_module is None:
+        from tamias2d import _snapshot as module
+        _snapshot_module = module
+    return _snapshot_module
 
 
 cdef object _shape_from_ptr(const cpShape *shape):
@@ -1203,8 +1217,8 @@ cdef class Shape:
 
     @property
     def elasticity(self):
-        """Elasticity (restitution) of the surface, >= 0. 0 gives no bounce,
-        1 a perfect bounce.
+        """Elasticity (restitution) of the surface, finite and >= 0. 0 gives
+        no bounce, 1 a perfect bounce.
 
         >>> import tamias2d
         >>> c = tamias2d.Circle(None, 1)
@@ -1220,7 +1234,7 @@ cdef class Shape:
 
     @property
     def friction(self):
-        """Coulomb friction coefficient of the surface, >= 0.
+        """Coulomb friction coefficient of the surface, finite and >= 0.
 
         >>> import tamias2d
         >>> c = tamias2d.Circle(None, 1)
@@ -1437,6 +1451,10 @@ cdef class Shape:
         >>> c2.radius
         1.0
         """
+        if isinstance(state, tuple):
+            # The compact state of __reduce_ex__ (see tamias2d._snapshot).
+            _snapshot().shape_setstate(self, state)
+            return
         init_args = [v for k, v in state["init"]]
         self.__init__(*init_args)
         for k, v in state["general"]:
@@ -1446,6 +1464,19 @@ cdef class Shape:
 
     def __reduce__(self):
         return (_copyreg.__newobj__, (type(self),), self.__getstate__())
+
+    def __reduce_ex__(self, protocol):
+        """What copy and pickle use: the kind, the body, the C struct as bytes
+        (bit for bit, the hash id included) and the user attributes; pymunk's
+        layout for a subclass that overrides ``__getstate__`` or
+        ``__setstate__``.
+
+        >>> import pickle, tamias2d
+        >>> c = tamias2d.Circle(tamias2d.Body(1, 1), 0.3)
+        >>> pickle.loads(pickle.dumps(c)).radius
+        0.3
+        """
+        return _snapshot().shape_reduce(self)
 
     def copy(self):
         """A deep copy of the shape (and of its body).
