@@ -4,7 +4,8 @@
 # bit; see munk2d-inventory.md, group 4.
 import copyreg
 import weakref
-from collections.abc import KeysView
+
+from tamias2d._weakkeysview import WeakKeysView
 
 from cpython.ref cimport PyObject, Py_INCREF
 from libc.math cimport INFINITY
@@ -416,6 +417,25 @@ cdef inline cpVect _finite_vect(object o, str what) except *:
     return v
 
 
+cdef int _undo_overflow(cpBody *body, cpVect a0, cpFloat b0, bint impulse) except -1:
+    # Finite inputs can still overflow (a huge force times a long lever arm
+    # gives an infinite torque); put the body back and refuse, rather than
+    # let the next step turn it into NaN.
+    cdef cpVect a = body.v if impulse else body.f
+    cdef cpFloat b = body.w if impulse else body.t
+    if _finite(a.x) and _finite(a.y) and _finite(b):
+        return 0
+    if impulse:
+        body.v = a0
+        body.w = b0
+    else:
+        body.f = a0
+        body.t = b0
+    raise IllegalBody("Body %s overflows: the resulting %s would not be finite." % (
+        "impulse" if impulse else "force",
+        "velocity or angular velocity" if impulse else "force or torque"))
+
+
 cdef inline double _finite_float(object o, str what) except? -1.0:
     cdef double x = o
     if not _finite(x):
@@ -436,6 +456,15 @@ cdef int _body_type_from_object(object body_type) except -1:
 
 
 cdef object _arbiter_factory = None
+cdef object _snapshot_module = None
+
+cdef object _snapshot():
+    # Lazy upward import: copy and pickle live above the space.
+    global _snapshot_module
+    if _snapshot_module is None:
+        from tamias2d import _snapshot as module
+        _snapshot_module = module
+    return _snapshot_module
 
 cdef object _get_arbiter_factory():
     # Lazy upward import: the space module sits above this one.
@@ -468,6 +497,23 @@ cdef int _check_can_sleep(Body self, Body group) except -1:
         raise IllegalBody("The body is already sleeping and its group cannot be reassigned.")
     if _hooks.sleep_with_group == NULL:
         raise RuntimeError("tamias2d.space is not loaded: sleeping needs the space module.")
+    return 0
+
+
+cdef int _check_constraints_allow_type(Body self) except -1:
+    # pymunk's rule for a body leaving the dynamic type while jointed: the body
+    # must be dynamic now, and so must the other body of each constraint (a
+    # joint between two non-dynamic bodies has no mass to solve for).
+    d = _user_dict(self).get("_constraints")
+    if not d:
+        return 0
+    for c in list(d):
+        other = c.b if c.a is self else c.a
+        if (cpBodyGetType(&self._body) != CP_BODY_TYPE_DYNAMIC
+                or other is None or other.body_type != <int>CP_BODY_TYPE_DYNAMIC):
+            raise IllegalBody(
+                f"Cannot set a non-dynamic body type when the body is connected to a "
+                f"constraint {c!r} with a non-dynamic other body.")
     return 0
 
 
@@ -776,6 +822,8 @@ cdef class Body:
         if self._body.space != NULL and self._body.space.locked:
             raise SpaceLocked("The body type cannot change while the space is locked "
                               "(during a step or a query); use a post-step callback.")
+        if t != CP_BODY_TYPE_DYNAMIC:
+            _check_constraints_allow_type(self)
         cpBodySetType(&self._body, <cpBodyType>t)
 
     @property
@@ -819,7 +867,7 @@ cdef class Body:
         d = ud.get("_constraints")
         if d is None:
             d = ud["_constraints"] = weakref.WeakKeyDictionary()
-        return KeysView(d)
+        return WeakKeysView(d)
 
     @property
     def is_sleeping(self):
@@ -938,8 +986,11 @@ cdef class Body:
         >>> b.force, b.torque
         (Vec2d(10.0, 0.0), -60.0)
         """
+        cdef cpVect a0 = self._body.f
+        cdef cpFloat b0 = self._body.t
         cpBodyApplyForceAtWorldPoint(&self._body, _finite_vect(force, "force"),
                                      _finite_vect(point, "force application point"))
+        _undo_overflow(&self._body, a0, b0, False)
 
     def apply_force_at_local_point(self, force, point=(0, 0)):
         """Add a force given in body coordinates, at a body-local point.
@@ -950,8 +1001,11 @@ cdef class Body:
         >>> b.force, b.torque
         (Vec2d(10.0, 0.0), -100.0)
         """
+        cdef cpVect a0 = self._body.f
+        cdef cpFloat b0 = self._body.t
         cpBodyApplyForceAtLocalPoint(&self._body, _finite_vect(force, "force"),
                                      _finite_vect(point, "force application point"))
+        _undo_overflow(&self._body, a0, b0, False)
 
     def apply_impulse_at_world_point(self, impulse, point):
         """Apply an impulse at a world point: changes the velocities at once.
@@ -963,8 +1017,11 @@ cdef class Body:
         >>> b.velocity, b.angular_velocity
         (Vec2d(10.0, 0.0), -30.0)
         """
+        cdef cpVect a0 = self._body.v
+        cdef cpFloat b0 = self._body.w
         cpBodyApplyImpulseAtWorldPoint(&self._body, _finite_vect(impulse, "impulse"),
                                        _finite_vect(point, "impulse application point"))
+        _undo_overflow(&self._body, a0, b0, True)
 
     def apply_impulse_at_local_point(self, impulse, point=(0, 0)):
         """Apply an impulse given in body coordinates at a body-local point.
@@ -975,8 +1032,11 @@ cdef class Body:
         >>> b.velocity, b.angular_velocity
         (Vec2d(10.0, 0.0), -50.0)
         """
+        cdef cpVect a0 = self._body.v
+        cdef cpFloat b0 = self._body.w
         cpBodyApplyImpulseAtLocalPoint(&self._body, _finite_vect(impulse, "impulse"),
                                        _finite_vect(point, "impulse application point"))
+        _undo_overflow(&self._body, a0, b0, True)
 
     # -- coordinates ------------------------------------------------------------------
     def local_to_world(self, v):
@@ -1140,6 +1200,10 @@ cdef class Body:
         >>> b.mass
         3.0
         """
+        if isinstance(state, tuple):
+            # The compact state of __reduce_ex__ (see tamias2d._snapshot).
+            _snapshot().body_setstate(self, state)
+            return
         self.__init__(*[v for k, v in state["init"]])
         for k, v in state["general"]:
             setattr(self, k, v)
@@ -1154,6 +1218,19 @@ cdef class Body:
 
     def __reduce__(self):
         return (copyreg.__newobj__, (type(self),), self.__getstate__())
+
+    def __reduce_ex__(self, protocol):
+        """What copy and pickle use: the C struct as bytes (bit for bit), the
+        user attributes and the integrators; pymunk's layout for a subclass
+        that overrides ``__getstate__`` or ``__setstate__``.
+
+        >>> import pickle, tamias2d
+        >>> b = tamias2d.Body(1, 2)
+        >>> b.position = 0.1, 0.2
+        >>> pickle.loads(pickle.dumps(b)).position == b.position
+        True
+        """
+        return _snapshot().body_reduce(self)
 
     def copy(self):
         """A deep copy of the body (without its shapes, constraints or space).

@@ -186,6 +186,22 @@ def test_body_constructor(mass, moment, body_type):
 
 
 @prop
+@given(which=st.sampled_from(["apply_force_at_world_point", "apply_force_at_local_point",
+                              "apply_impulse_at_world_point", "apply_impulse_at_local_point"]),
+       vec=any_vector, point=any_vector)
+def test_forces_and_impulses(which, vec, point):
+    s, (b, _) = small_scene()
+    before = body_state(b) + (*b.force, b.torque)
+    try:
+        getattr(b, which)(vec, point)
+    except CLEAR:
+        assert same(body_state(b) + (*b.force, b.torque), before)
+    else:
+        assert finite(*body_state(b), *b.force, b.torque)
+    assert_usable(s)
+
+
+@prop
 @given(v=any_vector)
 def test_body_conversions_never_crash(v):
     b = Body(1, 1)
@@ -912,3 +928,31 @@ def test_huge_friction_and_elasticity_stay_finite(attr, floor_value):
         s.step(1 / 60)
     assert finite(*body_state(b))
 
+
+# -- the force / impulse overflow fix -------------------------------------------------------
+
+@isolated(timeout=60)
+def test_overflowing_force_or_impulse_is_refused():
+    # Bug (fixed in body.pyx): finite arguments whose product overflows (a
+    # force of 1e308 at a lever arm of 1e308) left an infinite torque or
+    # angular velocity, and the next step a NaN body. Now IllegalBody, and
+    # the body is left as it was.
+    b = Body(1, 10)
+    b.apply_force_at_world_point((10, 0), (0, 10))
+    calls = [lambda: b.apply_force_at_world_point((1e308, 0), (0, 1e308)),
+             lambda: b.apply_force_at_local_point((1e308, 0), (0, 1e308)),
+             lambda: b.apply_force_at_world_point((1e308, 0), (0, 0)),  # f sums to inf
+             lambda: b.apply_impulse_at_world_point((1e308, 0), (0, 1e308)),
+             lambda: b.apply_impulse_at_local_point((0, 1e308), (1e308, 0))]
+    b.apply_force_at_world_point((1e308, 0), (0, 0))
+    before = (tuple(b.force), b.torque, tuple(b.velocity), b.angular_velocity)
+    for call in calls:
+        with pytest.raises(IllegalBody):
+            call()
+        assert (tuple(b.force), b.torque, tuple(b.velocity), b.angular_velocity) == before
+    s = Space()
+    s.add(b, Circle(b, 1))
+    b.force = 0, 0
+    b.torque = 0
+    s.step(1 / 60)
+    assert finite(*body_state(b))
