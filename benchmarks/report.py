@@ -55,6 +55,10 @@ def machine(results):
         f"- Command: `{meta.get('command', '?')}`, {meta.get('started', '?')}, "
         f"{meta.get('duration_s', 0):.0f} s",
     ]
+    if meta.get("clock") == "cpu":
+        lines.append("- Clock: CPU time of the benchmark process (`--clock cpu`), not elapsed time")
+    elif meta.get("clock") == "wall":
+        lines.append("- Clock: elapsed wall time")
     if meta.get("load_average_start") and meta.get("load_average_end"):
         lines.append("- Load average (1 min) at the start and the end: "
                      f"{meta['load_average_start'][0]:.2f}, {meta['load_average_end'][0]:.2f}")

@@ -3,6 +3,7 @@
     python benchmarks/run.py                     # everything, a few minutes
     python benchmarks/run.py --quick             # tiny sizes, 1 repeat: seconds
     python benchmarks/run.py --json out.json --plots docs --markdown tables.md
+    python benchmarks/run.py --clock cpu         # CPU time: steadier on a busy machine
 
 Sections (``--only`` picks some, comma-separated):
   scenes      step time of seven scenes at several sizes (pyramid, stack,
@@ -53,6 +54,9 @@ def parse_args(argv):
     parser.add_argument("--repeat", type=int, default=None,
                         help="timed repeats per item (default 7 for scenes and operations, "
                              "3 for scaling and accuracy; 1 with --quick)")
+    parser.add_argument("--clock", choices=sorted(harness.CLOCKS), default="wall",
+                        help="what the timings measure: elapsed wall time (default) or the CPU "
+                             "time of this process (steadier on a machine shared with other work)")
     parser.add_argument("--no-progress", action="store_true", help="no progress display on stderr")
     args = parser.parse_args(argv)
     if args.only:
@@ -89,6 +93,7 @@ def _load():
 
 def main(argv=None):
     args = parse_args(argv)
+    harness.set_clock(args.clock)
     tamias2d, pymunk = harness.import_engines()
     scenes = harness.import_scenes()
     import accuracy
@@ -114,6 +119,7 @@ def main(argv=None):
                             + list(sys.argv[1:] if argv is None else argv)),
         "started": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
         "quick": args.quick,
+        "clock": args.clock,
         "sections": args.sections,
         "machine": harness.machine_info(tamias2d, pymunk),
         "ratio": "tamias2d time / pymunk time (below 1: tamias2d faster)",

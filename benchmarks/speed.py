@@ -143,7 +143,7 @@ def run_scaling(mods, scenes, quick, progress, repeat=None):
             progress.start(f"scaling: {name} {n} bodies")
             row = time_pair(mods, lambda mod, n=n, b=build: b(mod, n), 1.0 / 60.0,
                             warmup=2 if quick else 10,
-                            repeat=repeat or (1 if quick else 3),
+                            repeat=repeat or (1 if quick else (7 if n <= 3000 else 3)),
                             block_s=0.0 if quick else 0.1,
                             min_steps=2 if quick else 3,
                             max_steps=3 if quick else 50)
