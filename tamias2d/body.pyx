@@ -4,8 +4,7 @@
 # bit; see munk2d-inventory.md, group 4.
 import copyreg
 import weakref
-
-from tamias2d._weakkeysview import WeakKeysView
+from collections.abc import KeysView
 
 from cpython.ref cimport PyObject, Py_INCREF
 from libc.math cimport INFINITY
@@ -456,15 +455,6 @@ cdef int _body_type_from_object(object body_type) except -1:
 
 
 cdef object _arbiter_factory = None
-cdef object _snapshot_module = None
-
-cdef object _snapshot():
-    # Lazy upward import: copy and pickle live above the space.
-    global _snapshot_module
-    if _snapshot_module is None:
-        from tamias2d import _snapshot as module
-        _snapshot_module = module
-    return _snapshot_module
 
 cdef object _get_arbiter_factory():
     # Lazy upward import: the space module sits above this one.
@@ -497,23 +487,6 @@ cdef int _check_can_sleep(Body self, Body group) except -1:
         raise IllegalBody("The body is already sleeping and its group cannot be reassigned.")
     if _hooks.sleep_with_group == NULL:
         raise RuntimeError("tamias2d.space is not loaded: sleeping needs the space module.")
-    return 0
-
-
-cdef int _check_constraints_allow_type(Body self) except -1:
-    # pymunk's rule for a body leaving the dynamic type while jointed: the body
-    # must be dynamic now, and so must the other body of each constraint (a
-    # joint between two non-dynamic bodies has no mass to solve for).
-    d = _user_dict(self).get("_constraints")
-    if not d:
-        return 0
-    for c in list(d):
-        other = c.b if c.a is self else c.a
-        if (cpBodyGetType(&self._body) != CP_BODY_TYPE_DYNAMIC
-                or other is None or other.body_type != <int>CP_BODY_TYPE_DYNAMIC):
-            raise IllegalBody(
-                f"Cannot set a non-dynamic body type when the body is connected to a "
-                f"constraint {c!r} with a non-dynamic other body.")
     return 0
 
 
@@ -822,8 +795,6 @@ cdef class Body:
         if self._body.space != NULL and self._body.space.locked:
             raise SpaceLocked("The body type cannot change while the space is locked "
                               "(during a step or a query); use a post-step callback.")
-        if t != CP_BODY_TYPE_DYNAMIC:
-            _check_constraints_allow_type(self)
         cpBodySetType(&self._body, <cpBodyType>t)
 
     @property
@@ -867,7 +838,7 @@ cdef class Body:
         d = ud.get("_constraints")
         if d is None:
             d = ud["_constraints"] = weakref.WeakKeyDictionary()
-        return WeakKeysView(d)
+        return KeysView(d)
 
     @property
     def is_sleeping(self):
@@ -1200,10 +1171,6 @@ cdef class Body:
         >>> b.mass
         3.0
         """
-        if isinstance(state, tuple):
-            # The compact state of __reduce_ex__ (see tamias2d._snapshot).
-            _snapshot().body_setstate(self, state)
-            return
         self.__init__(*[v for k, v in state["init"]])
         for k, v in state["general"]:
             setattr(self, k, v)
@@ -1218,19 +1185,6 @@ cdef class Body:
 
     def __reduce__(self):
         return (copyreg.__newobj__, (type(self),), self.__getstate__())
-
-    def __reduce_ex__(self, protocol):
-        """What copy and pickle use: the C struct as bytes (bit for bit), the
-        user attributes and the integrators; pymunk's layout for a subclass
-        that overrides ``__getstate__`` or ``__setstate__``.
-
-        >>> import pickle, tamias2d
-        >>> b = tamias2d.Body(1, 2)
-        >>> b.position = 0.1, 0.2
-        >>> pickle.loads(pickle.dumps(b)).position == b.position
-        True
-        """
-        return _snapshot().body_reduce(self)
 
     def copy(self):
         """A deep copy of the body (without its shapes, constraints or space).
