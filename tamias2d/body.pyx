@@ -435,6 +435,15 @@ cdef int _undo_overflow(cpBody *body, cpVect a0, cpFloat b0, bint impulse) excep
         "velocity or angular velocity" if impulse else "force or torque"))
 
 
+cdef int _check_invertible(double x, str what) except -1:
+    # 0 (a placeholder until shapes give the mass) and inf (no rotation) are
+    # fine; a positive value whose inverse overflows (a subnormal such as
+    # 5e-324) would give m_inv = inf and a NaN body at the first contact.
+    if 0.0 < x < INFINITY and not (1.0 / x < INFINITY):
+        raise IllegalBody("%s %r is too small: its inverse is not finite." % (what, x))
+    return 0
+
+
 cdef inline double _finite_float(object o, str what) except? -1.0:
     cdef double x = o
     if not _finite(x):
@@ -548,6 +557,8 @@ cdef class Body:
                 raise IllegalBody("Mass must be non-negative and finite, got %r." % m)
             if not (i >= 0.0):
                 raise IllegalBody("Moment of inertia must be non-negative, got %r." % i)
+            _check_invertible(m, "Mass")
+            _check_invertible(i, "Moment of inertia")
         # A fresh body every time, as pymunk allocates a new cpBody.
         memset(&self._body, 0, sizeof(cpBody))
         cpBodyInit(&self._body, m, i)
@@ -603,6 +614,7 @@ cdef class Body:
             raise IllegalBody("Mass must be non-negative and finite, got %r." % m)
         if self._body.space != NULL and not (m > 0.0):
             raise IllegalBody("Dynamic bodies must have mass > 0 if they are attached to a Space.")
+        _check_invertible(m, "Mass")
         cpBodySetMass(&self._body, m)
 
     @property
@@ -627,6 +639,7 @@ cdef class Body:
             raise IllegalBody("Moment of inertia must be non-negative, got %r." % i)
         if self._body.space != NULL and not (i > 0.0):
             raise IllegalBody("Dynamic bodies must have moment > 0 if they are attached to a Space.")
+        _check_invertible(i, "Moment of inertia")
         cpBodySetMoment(&self._body, i)
 
     @property
