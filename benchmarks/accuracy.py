@@ -2,8 +2,9 @@
 and the solver iterations, in both engines.
 
 For every case, engine, time step and iteration count the scene is built
-fresh and simulated for a fixed time; the cost is the wall time per
-simulated second (the Python loop calling ``step`` included, and the
+fresh and simulated for a fixed time; the cost is the time (wall or CPU,
+as run.py's --clock says) per simulated second (the Python loop calling
+``step`` included, and the
 per-step force or torque writes of IM1 and IM2, which are the same calls in
 both engines), the error is measured against the known answer:
 
@@ -202,7 +203,7 @@ def run_accuracy(mods, scenes, quick, progress, repeat=None):
             for it in its:
                 progress.start(f"accuracy: {name} dt=1/{round(1 / dt)} iterations={it}")
                 results = {}
-                reps = 1 if quick else (repeat or 3)
+                reps = 1 if quick else (repeat or 5)
                 for r in range(reps):
                     order = ENGINES if r % 2 == 0 else ENGINES[::-1]
                     for e in order:

@@ -2,7 +2,7 @@
 
     scene-ratios.png    tamias2d / pymunk step time per scene and size
     scaling.png         step time and time per body against body count
-    speed-vs-error.png  error against wall time per simulated second, one
+    speed-vs-error.png  error against time per simulated second, one
                         panel per case and metric, the best front outlined
 """
 import os
@@ -76,7 +76,8 @@ def plot_scaling(results, path):
     ax1.set_xscale("log")
     ax1.set_yscale("log")
     ax1.set_xlabel("bodies")
-    ax1.set_ylabel("ms per step")
+    clock = "CPU" if results.get("meta", {}).get("clock") == "cpu" else "wall"
+    ax1.set_ylabel(f"ms per step ({clock} time)")
     ax1.set_title("Step time against body count", fontsize=10)
     ax1.grid(True, which="both", alpha=0.3)
     ax1.legend(fontsize=7)
@@ -136,7 +137,8 @@ def plot_speed_vs_error(results, path):
         ax.set_yscale("log")
         _plain_log_ticks(ax)
         ax.set_title(f"{case}: {metric}", fontsize=10)
-        ax.set_xlabel("ms of wall time per simulated second", fontsize=8)
+        clock = "CPU" if results.get("meta", {}).get("clock") == "cpu" else "wall"
+        ax.set_xlabel(f"ms of {clock} time per simulated second", fontsize=8)
         ax.set_ylabel(f"error ({unit})", fontsize=8)
         ax.tick_params(labelsize=7)
         ax.grid(True, which="both", alpha=0.25)

@@ -143,7 +143,8 @@ def accuracy_tables(results):
         cost_rows.append([case, _num(p["cost"] * 1e3), _num(t["cost"] * 1e3),
                           f"{t['cost'] / p['cost']:.2f}", f"{statistics.median(ratios):.2f}",
                           f"{min(ratios):.2f} to {max(ratios):.2f}"])
-    text += ("\n\n#### Cost\n\nWall milliseconds per simulated second at dt = 1/"
+    clock = "CPU" if results.get("meta", {}).get("clock") == "cpu" else "wall"
+    text += (f"\n\n#### Cost\n\nMilliseconds of {clock} time per simulated second at dt = 1/"
              f"{round(1 / d60)} and {i10} iterations, and the tamias2d/pymunk cost ratio over "
              "all settings.\n\n" + _table(
                  ["case", "pymunk ms/s", "tamias2d ms/s", "ratio", "median ratio, all settings",

@@ -52,8 +52,8 @@ def parse_args(argv):
     parser.add_argument("--only", metavar="SECTIONS",
                         help="comma-separated sections to run: " + ", ".join(SECTIONS))
     parser.add_argument("--repeat", type=int, default=None,
-                        help="timed repeats per item (default 7 for scenes and operations, "
-                             "3 for scaling and accuracy; 1 with --quick)")
+                        help="timed repeats per item (default: 7 for scenes and operations, "
+                             "5 for accuracy, 7 or 3 for scaling; 1 with --quick)")
     parser.add_argument("--clock", choices=sorted(harness.CLOCKS), default="wall",
                         help="what the timings measure: elapsed wall time (default) or the CPU "
                              "time of this process (steadier on a machine shared with other work)")
