@@ -215,7 +215,7 @@ def run_operations(mods, scenes, quick, progress, repeat=None):
     t, k = _time_ops(funcs, 2 * repeat + 1, 5 * budget)
     calls = round((counters["tamias2d"][0] - before) / max(steps[0], 1))
     rows.append(_row("step, box wall (no callbacks)", nc, t, k,
-                     f"{nc} boxes in 10 layers, {calls} contact pairs per step on average"))
+                     f"{nc} boxes in 5 layers, {calls} contact pairs per step on average"))
     rows.append(_row("step with a Python post_solve on every contact", nc,
                      {**{e: t[e + "+cb"] for e in ENGINES}, "_raw": t["_raw"]}, k,
                      f"{calls} callbacks per step on average; each reads arbiter.total_impulse",

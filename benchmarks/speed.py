@@ -120,7 +120,7 @@ def run_scenes(mods, scenes, quick, progress, repeat=None):
 # -- scaling ---------------------------------------------------------------------------
 
 SCALING_SCENES = {
-    "box wall": ("boxes in 10 layers side by side on the ground (contacts grow with the count)",
+    "box wall": ("columns of 5 boxes side by side on the ground: one contact per box",
                  lambda mod, n: more_scenes.box_wall(mod, count=n)),
     "sparse field": ("circles far apart drifting together, no gravity, no contacts",
                      lambda mod, n: more_scenes.sparse_field(mod, count=n)),
