@@ -19,3 +19,6 @@ from .collision import ContactPoint, ContactPointSet
 from .arbiter import Arbiter
 from .space import Space, empty_callback
 from . import batch
+from . import constraints
+from .constraints import (Constraint, PinJoint, SlideJoint, PivotJoint, GrooveJoint,
+    DampedSpring, DampedRotarySpring, RotaryLimitJoint, RatchetJoint, GearJoint, SimpleMotor)

@@ -188,6 +188,8 @@ cdef void cpBodyRemoveShape(cpBody *body, cpShape *shape) noexcept nogil:
 
 cdef cpConstraint *_filter_constraints(cpConstraint *node, cpBody *body,
                                        cpConstraint *filter) noexcept nogil:
+    if node == NULL:
+        return NULL  # not in the list (the body was re-initialised): nothing to unlink
     if node == filter:
         return _constraint_next(node, body)
     elif node.a == body:
@@ -496,6 +498,23 @@ cdef int _check_can_sleep(Body self, Body group) except -1:
         raise IllegalBody("The body is already sleeping and its group cannot be reassigned.")
     if _hooks.sleep_with_group == NULL:
         raise RuntimeError("tamias2d.space is not loaded: sleeping needs the space module.")
+    return 0
+
+
+cdef int _check_constraints_allow_type(Body self) except -1:
+    # pymunk's rule for a body leaving the dynamic type while jointed: the body
+    # must be dynamic now, and so must the other body of each constraint (a
+    # joint between two non-dynamic bodies has no mass to solve for).
+    d = _user_dict(self).get("_constraints")
+    if not d:
+        return 0
+    for c in list(d):
+        other = c.b if c.a is self else c.a
+        if (cpBodyGetType(&self._body) != CP_BODY_TYPE_DYNAMIC
+                or other is None or other.body_type != <int>CP_BODY_TYPE_DYNAMIC):
+            raise IllegalBody(
+                f"Cannot set a non-dynamic body type when the body is connected to a "
+                f"constraint {c!r} with a non-dynamic other body.")
     return 0
 
 
@@ -808,6 +827,8 @@ cdef class Body:
         if self._body.space != NULL and self._body.space.locked:
             raise SpaceLocked("The body type cannot change while the space is locked "
                               "(during a step or a query); use a post-step callback.")
+        if t != CP_BODY_TYPE_DYNAMIC:
+            _check_constraints_allow_type(self)
         cpBodySetType(&self._body, <cpBodyType>t)
 
     @property

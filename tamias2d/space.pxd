@@ -70,7 +70,7 @@ cdef class Space:
     cdef bint _initialized       # cpSpaceInit succeeded (and cpSpaceDestroy is due)
     cdef dict _bodies            # Body -> None, insertion order (pymunk's Space.bodies)
     cdef dict _shapes            # Shape -> None
-    cdef dict _constraints       # constraints (none can be added yet)
+    cdef dict _constraints       # Constraint -> None, insertion order
     cdef object _static_body     # the lazily created Python static body, or None
     cdef readonly dict _handlers # key -> CollisionHandler (keeps the callbacks alive)
     cdef dict _post_step_callbacks

@@ -59,6 +59,9 @@ from tamias2d.arbiter cimport (Arbiter, arbiter_wrap, cpArbiterInit, cpArbiterUp
     cpArbiterPreStep, cpArbiterApplyCachedImpulse, cpArbiterApplyImpulse,
     cpArbiterUnthread, cpCollisionHandlerDoNothing, cpCollisionDoNothing,
     cpArbiterThreadForBody, cpArbiterNext)
+from tamias2d.body cimport cpBodyRemoveConstraint
+from tamias2d.constraints cimport (Constraint, tamias_constraint_detach,
+    tamias_space_detach_constraints, tamias_check_constraints, tamias_constraint_debug_draw)
 
 from tamias2d.shape import PointQueryInfo, SegmentQueryInfo, ShapeQueryInfo
 from tamias2d.errors import (IllegalBody, IllegalShape, SpaceLocked, AlreadyInSpace,
@@ -373,6 +376,32 @@ cdef void cpSpaceRemoveBody(cpSpace *space, cpBody *body) noexcept nogil:
     # Munk2D does not filter the body's arbiters here (only shape removal does).
     cpArrayDeleteObj(cpSpaceArrayForBodyType(space, cpBodyGetType(body)), body)
     body.space = NULL
+
+# Callers check Munk2D's hard asserts (not in a space, unlocked, both bodies
+# set). NULL when out of memory (nothing changed).
+cdef cpConstraint *cpSpaceAddConstraint(cpSpace *space, cpConstraint *constraint) noexcept nogil:
+    cdef cpBody *a = constraint.a
+    cdef cpBody *b = constraint.b
+    cpBodyActivate(a)
+    cpBodyActivate(b)
+    if not cpArrayPush(space.constraints, constraint):
+        return NULL
+    # Head insertion into both bodies' lists.
+    constraint.next_a = a.constraintList
+    a.constraintList = constraint
+    constraint.next_b = b.constraintList
+    b.constraintList = constraint
+    constraint.space = space
+    return constraint
+
+cdef void cpSpaceRemoveConstraint(cpSpace *space, cpConstraint *constraint) noexcept nogil:
+    # Waking first puts a sleeping constraint back in the array.
+    cpBodyActivate(constraint.a)
+    cpBodyActivate(constraint.b)
+    cpArrayDeleteObj(space.constraints, constraint)
+    cpBodyRemoveConstraint(constraint.a, constraint)
+    cpBodyRemoveConstraint(constraint.b, constraint)
+    constraint.space = NULL
 
 
 # -- iteration ----------------------------------------------------------------------------
@@ -1536,11 +1565,41 @@ cdef list _hits_to_list(QueryHits *hits, int kind):
     return result
 
 
+cdef _add_constraint(Space space, Constraint constraint):
+    # pymunk's checks, then Munk2D's hard asserts as exceptions.
+    if constraint in space._constraints:
+        raise AlreadyInSpace("Constraint already added to space.")
+    cdef cpConstraint *c = constraint._constraint
+    if c.space != NULL:
+        raise AlreadyInSpace("Constraint already added to another space. A constraint can "
+                             "only be in one space at a time.")
+    if c.a == NULL or c.b == NULL or constraint._a is None or constraint._b is None:
+        raise IllegalBody("The constraint's bodies are not set (it was never initialised).")
+    if (cpBodyGetType(c.a) != CP_BODY_TYPE_DYNAMIC
+            and cpBodyGetType(c.b) != CP_BODY_TYPE_DYNAMIC):
+        raise IllegalBody("At least one of a constraint's bodies must be DYNAMIC.")
+    if cpSpaceIsLocked(&space._space):
+        raise SpaceLocked("the space is locked (a query or debug draw is running)")
+    space._constraints[constraint] = None
+    if cpSpaceAddConstraint(&space._space, c) == NULL:
+        del space._constraints[constraint]
+        cpTakeOutOfMemory()
+        raise MemoryError("not enough memory to add the constraint")
+
+
+cdef _remove_constraint(Space space, Constraint constraint):
+    if constraint not in space._constraints:
+        raise NotInSpace("constraint not in space, already removed?")
+    if constraint._constraint.space == &space._space:
+        cpSpaceRemoveConstraint(&space._space, constraint._constraint)
+    del space._constraints[constraint]
+
+
 @cython.no_gc_clear
 cdef class Space:
     """A world of bodies and shapes that steps forward through time.
 
-    Add bodies, shapes (and later joints) with :meth:`add`, then call
+    Add bodies, shapes and constraints (joints) with :meth:`add`, then call
     :meth:`step` with a fixed time step. Collision callbacks are set with
     :meth:`on_collision`.
 
@@ -1596,13 +1655,17 @@ cdef class Space:
                 h.postSolveFunc = cpCollisionDoNothing
                 h.separateFunc = cpCollisionDoNothing
         self._space.locked = 0
-        # Detach every shape and body, as pymunk does when its space is freed.
+        # Detach every shape, constraint and body, as pymunk does when its
+        # space is freed.
         cdef cpBody *body
         if self._shapes is not None:
             for shape in list(self._shapes):
                 (<Shape>shape)._space = None
                 if (<Shape>shape)._shape.space == &self._space:
                     cpSpaceRemoveShape(&self._space, (<Shape>shape)._shape)
+        # Constraints are found through the C space too: the dict may have been
+        # cleared by the garbage collector while a constraint lives on.
+        tamias_space_detach_constraints(&self._space)
         bodies = list(self._bodies) if self._bodies is not None else []
         if self._static_body is not None:
             bodies.append(self._static_body)
@@ -1664,7 +1727,8 @@ cdef class Space:
 
     @property
     def constraints(self):
-        """The constraints in the space (a live view).
+        """The constraints (joints) in the space, a live view in the order
+        they were added.
 
         >>> import tamias2d
         >>> len(tamias2d.Space().constraints)
@@ -1858,10 +1922,12 @@ cdef class Space:
     # -- adding and removing ---------------------------------------------------------------
 
     def add(self, *objs):
-        """Add bodies and shapes (in any order: bodies go in first).
+        """Add bodies, shapes and constraints (in any order: bodies go in
+        first, then shapes and constraints in the order given).
 
         Inside a step (from a callback) the objects are added when the step
-        ends, in the order they were passed.
+        ends, in the order they were passed. A constraint's bodies need not
+        be in the space (as in pymunk).
 
         >>> import tamias2d
         >>> s = tamias2d.Space()
@@ -1878,15 +1944,17 @@ cdef class Space:
         if cpSpaceIsLocked(&self._space):
             raise SpaceLocked("the space is locked (a query or debug draw is running)")
         for o in objs:
-            if not isinstance(o, (Body, Shape)):
+            if not isinstance(o, (Body, Shape, Constraint)):
                 raise TypeError(f"Unsupported type {type(o)} of {o!r}: "
-                                "only bodies and shapes can be added to a Space")
+                                "only bodies, shapes and constraints can be added to a Space")
         for o in objs:
             if isinstance(o, Body):
                 self._add_body(<Body>o)
         for o in objs:
             if isinstance(o, Shape):
                 self._add_shape(<Shape>o)
+            elif isinstance(o, Constraint):
+                _add_constraint(self, <Constraint>o)
 
     cdef _add_body(self, Body body):
         if body in self._bodies:
@@ -1919,7 +1987,7 @@ cdef class Space:
             raise MemoryError("the space ran out of memory while adding the shape")
 
     def remove(self, *objs):
-        """Remove bodies and shapes.
+        """Remove bodies, shapes and constraints.
 
         Inside a step (from a callback) the removal happens when the step
         ends. Removing a shape that touches another calls the ``separate``
@@ -1955,6 +2023,8 @@ cdef class Space:
                 self._remove_body(<Body>o)
             elif isinstance(o, Shape):
                 self._remove_shape(<Shape>o)
+            elif isinstance(o, Constraint):
+                _remove_constraint(self, <Constraint>o)
             else:
                 raise TypeError(f"Unsupported type {type(o)} of {o!r}")
 
@@ -2098,6 +2168,8 @@ cdef class Space:
         if cpSpaceIsLocked(&self._space) or self._locked:
             raise SpaceLocked("step() cannot be called from inside a step or a query")
         self._check_bodies()
+        if self._space.constraints.num:
+            tamias_check_constraints(&self._space)
         self._locked = True
         try:
             with nogil:
@@ -2415,6 +2487,8 @@ cdef class Space:
         cdef int i, j, count
         cdef cpArbiter *arb
         cdef cpArray *arbiters
+        cdef cpArray *carr
+        cdef Constraint con
 
         if flags & 1:
             # Shapes in cpSpaceEachShape order: dynamic tree, then static tree.
@@ -2458,7 +2532,18 @@ cdef class Space:
                         verts.append(vec2d_from_cpv(p))
                     options.draw_polygon(verts, r, outline, fill)
 
-        # (flags & 2: constraints; none can be added yet.)
+        if flags & 2:
+            # cpSpaceEachConstraint order: the space's constraint array.
+            carr = self._space.constraints
+            constraints = []
+            for i in range(carr.num):
+                constraints.append(<object>(<cpConstraint *>carr.arr[i]).userData)
+            color = options.constraint_color
+            for obj in constraints:
+                con = <Constraint>obj
+                if con._constraint.space != &self._space:
+                    continue  # removed by an earlier draw call
+                tamias_constraint_debug_draw(con._constraint, t, options, color)
 
         if flags & 4:
             color = options.collision_point_color
