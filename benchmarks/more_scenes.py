@@ -103,6 +103,15 @@ def box_wall(mod, count=1000, layers=5, size=10.0):
     return space
 
 
+def sleeping_wall(mod, count=1000):
+    """The box wall with sleeping enabled (bodies idle for 0.5 s fall asleep):
+    after a few seconds every box sleeps, and a step should cost next to
+    nothing."""
+    space = box_wall(mod, count=count)
+    space.sleep_time_threshold = 0.5
+    return space
+
+
 def with_post_solve(space, counter):
     """Install a Python post_solve callback on every contact pair (the
     global handler) that reads the arbiter's impulse, as a game reading

@@ -18,11 +18,13 @@ def scene_specs(scenes, quick):
     dt = 1.0 / 60.0
     if quick:
         sizes = {"pyramid": [4], "stack": [4], "rain": [40], "drum": [30],
-                 "static field": [100], "sparse field": [50], "callback rain": [40]}
+                 "static field": [100], "sparse field": [50], "sleeping wall": [50],
+                 "callback rain": [40]}
     else:
         sizes = {"pyramid": [10, 20, 40], "stack": [10, 20, 40], "rain": [250, 1000, 2000],
                  "drum": [250, 1000], "static field": [1000, 5000],
-                 "sparse field": [1000, 5000], "callback rain": [250, 1000]}
+                 "sparse field": [1000, 5000], "sleeping wall": [1000, 10000],
+                 "callback rain": [250, 1000]}
 
     def drum(n):
         # a drum just big enough for n boxes of 10 (14 per 100 px of radius squared)
@@ -45,6 +47,9 @@ def scene_specs(scenes, quick):
     for n in sizes["sparse field"]:
         specs.append(("sparse field", n, "circles",
                       lambda mod, n=n: more_scenes.sparse_field(mod, count=n), dt))
+    for n in sizes["sleeping wall"]:
+        specs.append(("sleeping wall", n, "boxes",
+                      lambda mod, n=n: more_scenes.sleeping_wall(mod, count=n), dt))
     for n in sizes["callback rain"]:
         specs.append(("callback rain", n, "circles",
                       lambda mod, n=n: more_scenes.callback_rain(mod, count=n, scenes=scenes), dt))
@@ -58,8 +63,13 @@ SCENE_NOTES = {
     "drum": "boxes tumbling in a turning kinematic octagonal drum (tests/scenes.py)",
     "static field": "Galton board: static circle pegs, 30 balls falling through",
     "sparse field": "circles far apart drifting together without gravity: no contacts",
+    "sleeping wall": "the box wall with sleeping on, timed once every box sleeps",
     "callback rain": "rain with a Python post_solve callback on every contact",
 }
+
+# Warm-up steps of scenes that need more than the default 60 (the sleeping
+# wall: until every box has fallen asleep).
+WARMUP = {"sleeping wall": 240}
 
 
 def time_pair(mods, build, dt, warmup, repeat, block_s, min_steps, max_steps):
@@ -104,7 +114,7 @@ def run_scenes(mods, scenes, quick, progress, repeat=None):
     for name, size, unit, build, dt in specs:
         progress.start(f"scenes: {name} {size} {unit}")
         row = time_pair(mods, build, dt,
-                        warmup=3 if quick else 60,
+                        warmup=3 if quick else WARMUP.get(name, 60),
                         repeat=repeat or (1 if quick else 7),
                         block_s=0.0 if quick else 0.05,
                         min_steps=2 if quick else 5,

@@ -21,7 +21,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BENCH = os.path.join(ROOT, "benchmarks")
 RUN = os.path.join(BENCH, "run.py")
 
-SCENES = {"pyramid", "stack", "rain", "drum", "static field", "sparse field", "callback rain"}
+SCENES = {"pyramid", "stack", "rain", "drum", "static field", "sparse field", "sleeping wall",
+          "callback rain"}
 ACCURACY = {
     "IM1 free flight": {"position"}, "IM2 spin": {"angle"}, "IM3 head-on": {"velocity"},
     "incline": {"acceleration", "distance"}, "stack": {"penetration", "drift"},
