@@ -31,7 +31,12 @@ directives = {
     "cdivision": True,
     "embedsignature": True,
     "initializedcheck": DEBUG,
-    "freethreading_compatible": True,
+    # No "freethreading_compatible": the step releases the GIL (so spaces
+    # stepped in different threads run in parallel in any build), but the
+    # Python-level methods of Space, Body and Shape rely on the GIL to be
+    # atomic with respect to each other (add/remove, reindex, property
+    # setters). A free-threaded interpreter therefore keeps the GIL on for
+    # tamias2d. See docs/architecture.md, "Copy, pickle and threads".
 }
 
 if sys.platform == "win32":

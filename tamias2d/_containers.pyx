@@ -17,9 +17,25 @@ from libc.stdint cimport uintptr_t
 # -- allocation ----------------------------------------------------------------
 # Test hook: when _fail_after >= 0, that many more allocations succeed, then the
 # next _fail_count ones fail. Lets the tests reach the out-of-memory paths.
-cdef long _fail_after = -1
-cdef long _fail_count = 0
-cdef bint _out_of_memory = False
+#
+# These three are per thread: steps of different spaces run at the same time
+# on different threads (without the GIL), and each thread must read back the
+# out-of-memory flag its own calls raised. The test hook arms the calling
+# thread only.
+cdef extern from *:
+    """
+    #if defined(_MSC_VER)
+    #define TAMIAS_CONTAINERS_TLS __declspec(thread)
+    #else
+    #define TAMIAS_CONTAINERS_TLS __thread
+    #endif
+    static TAMIAS_CONTAINERS_TLS long tamias_fail_after = -1;
+    static TAMIAS_CONTAINERS_TLS long tamias_fail_count = 0;
+    static TAMIAS_CONTAINERS_TLS int tamias_out_of_memory = 0;
+    """
+    long _fail_after "tamias_fail_after"
+    long _fail_count "tamias_fail_count"
+    bint _out_of_memory "tamias_out_of_memory"
 
 
 cdef inline bint _should_fail() noexcept nogil:

@@ -4,7 +4,8 @@
 # bit; see munk2d-inventory.md, group 4.
 import copyreg
 import weakref
-from collections.abc import KeysView
+
+from tamias2d._weakkeysview import WeakKeysView
 
 from cpython.ref cimport PyObject, Py_INCREF
 from libc.math cimport INFINITY
@@ -466,6 +467,15 @@ cdef int _body_type_from_object(object body_type) except -1:
 
 
 cdef object _arbiter_factory = None
+cdef object _snapshot_module = None
+
+cdef object _snapshot():
+    # Lazy upward import: copy and pickle live above the space.
+    global _snapshot_module
+    if _snapshot_module is None:
+        from tamias2d import _snapshot as module
+        _snapshot_module = module
+    return _snapshot_module
 
 cdef object _get_arbiter_factory():
     # Lazy upward import: the space module sits above this one.
@@ -872,7 +882,7 @@ cdef class Body:
         d = ud.get("_constraints")
         if d is None:
             d = ud["_constraints"] = weakref.WeakKeyDictionary()
-        return KeysView(d)
+        return WeakKeysView(d)
 
     @property
     def is_sleeping(self):
@@ -1205,6 +1215,10 @@ cdef class Body:
         >>> b.mass
         3.0
         """
+        if isinstance(state, tuple):
+            # The compact state of __reduce_ex__ (see tamias2d._snapshot).
+            _snapshot().body_setstate(self, state)
+            return
         self.__init__(*[v for k, v in state["init"]])
         for k, v in state["general"]:
             setattr(self, k, v)
@@ -1219,6 +1233,21 @@ cdef class Body:
 
     def __reduce__(self):
         return (copyreg.__newobj__, (type(self),), self.__getstate__())
+
+    def __reduce_ex__(self, protocol):
+        """What copy and pickle use: the C struct as bytes, the user
+        attributes and the integrators (pymunk's layout for a subclass that
+        overrides ``__getstate__`` or ``__setstate__``). A body restored on
+        its own comes back as pymunk restores it; inside a space's state it
+        comes back bit for bit (see tamias2d._snapshot).
+
+        >>> import pickle, tamias2d
+        >>> b = tamias2d.Body(1, 2)
+        >>> b.position = 0.1, 0.2
+        >>> pickle.loads(pickle.dumps(b)).position == b.position
+        True
+        """
+        return _snapshot().body_reduce(self)
 
     def copy(self):
         """A deep copy of the body (without its shapes, constraints or space).

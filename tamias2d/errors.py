@@ -13,7 +13,7 @@ __all__ = [
     "UnsolvableCollision",
     "CollisionContactOverflow", "SameVertices", "CollisionError",
     "SpaceLocked", "AlreadyInSpace", "NotInSpace", "CallbackError",
-    "IllegalCollisionType",
+    "IllegalCollisionType", "CopyError",
     "HighIterWarning",
 ]
 
@@ -106,6 +106,13 @@ class NotInSpace(Tamias2DError, ValueError, AssertionError):
 class IllegalCollisionType(Tamias2DError, ValueError, AssertionError):
     """A collision type pair that cannot key a handler (a wildcard first and a
     type second)."""
+
+
+class CopyError(Tamias2DError, ValueError, AssertionError):
+    """A space, body or shape cannot be copied, pickled or restored: a
+    pickle from another tamias2d version or build, a corrupt state, or a copy
+    that reaches the object being copied from that object's own state (a
+    circular reference, which pymunk also refuses with an AssertionError)."""
 
 
 class CallbackError(Tamias2DError, RuntimeError):

@@ -1045,6 +1045,17 @@ cdef int _check_transform_finite(const cpTransform *t) except -1:
     return 0
 
 
+cdef object _snapshot_module = None
+
+cdef object _snapshot():
+    # Lazy upward import: copy and pickle live above the space.
+    global _snapshot_module
+    if _snapshot_module is None:
+        from tamias2d import _snapshot as module
+        _snapshot_module = module
+    return _snapshot_module
+
+
 cdef object _shape_from_ptr(const cpShape *shape):
     if shape == NULL or shape.userData == NULL:
         return None
@@ -1440,6 +1451,10 @@ cdef class Shape:
         >>> c2.radius
         1.0
         """
+        if isinstance(state, tuple):
+            # The compact state of __reduce_ex__ (see tamias2d._snapshot).
+            _snapshot().shape_setstate(self, state)
+            return
         init_args = [v for k, v in state["init"]]
         self.__init__(*init_args)
         for k, v in state["general"]:
@@ -1449,6 +1464,20 @@ cdef class Shape:
 
     def __reduce__(self):
         return (_copyreg.__newobj__, (type(self),), self.__getstate__())
+
+    def __reduce_ex__(self, protocol):
+        """What copy and pickle use: the kind, the body, the C struct as bytes
+        and the user attributes (pymunk's layout for a subclass that overrides
+        ``__getstate__`` or ``__setstate__``). A shape restored on its own
+        comes back as pymunk restores it; inside a space's state it comes
+        back bit for bit (see tamias2d._snapshot).
+
+        >>> import pickle, tamias2d
+        >>> c = tamias2d.Circle(tamias2d.Body(1, 1), 0.3)
+        >>> pickle.loads(pickle.dumps(c)).radius
+        0.3
+        """
+        return _snapshot().shape_reduce(self)
 
     def copy(self):
         """A deep copy of the shape (and of its body).

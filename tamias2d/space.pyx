@@ -16,6 +16,7 @@ from libc.string cimport memcpy
 from libc.stdint cimport uintptr_t
 from cpython.ref cimport PyObject
 
+import copyreg
 import math
 import platform
 import weakref
@@ -1515,6 +1516,17 @@ cdef void _pySeparate(cpArbiter *arb, cpSpace *space, void *data) noexcept nogil
     _callPyHandler(arb, space, data, _SEPARATE)
 
 
+cdef object _snapshot_module = None
+
+cdef object _snapshot():
+    # Copy and pickle live in tamias2d._snapshot, which cimports this module.
+    global _snapshot_module
+    if _snapshot_module is None:
+        from tamias2d import _snapshot as module
+        _snapshot_module = module
+    return _snapshot_module
+
+
 def _arbiter_for_body(arb_ptr, space):
     """Factory used by Body.each_arbiter: an Arbiter view of a C arbiter.
 
@@ -1904,20 +1916,35 @@ cdef class Space:
 
     @property
     def threads(self):
-        """Solver threads: always 1 (tamias2d's solver is single-threaded,
-        which keeps it deterministic). Setting it has no effect.
+        """The thread count asked of a ``threaded`` space (1 or 2, as pymunk
+        clamps it; always 1 for a space that is not threaded).
+
+        Kept for pymunk's API only: tamias2d always solves a step on the
+        calling thread, which keeps results deterministic and equal to a
+        one-thread pymunk step. To use several cores, step separate spaces
+        in separate threads (the step runs without the GIL).
 
         >>> import tamias2d
         >>> s = tamias2d.Space(threaded=True)
         >>> s.threads = 2
         >>> s.threads
+        2
+        >>> t = tamias2d.Space()
+        >>> t.threads = 2
+        >>> t.threads
         1
         """
-        return 1
+        if not self.threaded:
+            return 1
+        return getattr(self, "__dict__").get("_threads", 1)
 
     @threads.setter
     def threads(self, n):
-        pass
+        cdef long k = n
+        if not self.threaded:
+            return
+        # pymunk's threaded space: 0 means 1, at most 2.
+        getattr(self, "__dict__")["_threads"] = 1 if k <= 1 else 2
 
     # -- adding and removing ---------------------------------------------------------------
 
@@ -2563,6 +2590,56 @@ cdef class Space:
                 if math.isnan(ax) or math.isnan(ay) or math.isnan(bx) or math.isnan(by):
                     continue
                 options.draw_segment(vec2d_from_cpv(cpv(ax, ay)), vec2d_from_cpv(cpv(bx, by)), color)
+
+    # -- copy and pickle (tamias2d._snapshot) ----------------------------------------------------
+
+    def __getstate__(self):
+        """The state used by copy and pickle: pymunk's layout (settings,
+        user attributes, bodies, shapes, collision handlers, counters) plus
+        the C state, so that a restored space steps on bit for bit as this
+        one would. Not allowed during a step or a query.
+
+        >>> import tamias2d
+        >>> sorted(tamias2d.Space().__getstate__())
+        ['custom', 'general', 'init', 'special']
+        """
+        return _snapshot().space_getstate(self)
+
+    def __setstate__(self, state):
+        """Restore a state made by :meth:`__getstate__` into a new Space.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> s.iterations = 3
+        >>> t = tamias2d.Space.__new__(tamias2d.Space)
+        >>> t.__setstate__(s.__getstate__())
+        >>> t.iterations
+        3
+        """
+        _snapshot().space_setstate(self, state)
+
+    def __reduce__(self):
+        return (copyreg.__newobj__, (type(self),), self.__getstate__())
+
+    def __deepcopy__(self, memo):
+        return _snapshot().space_deepcopy(self, memo)
+
+    def copy(self):
+        """A deep copy of the space: new bodies, shapes and collision
+        handlers in the same state, stepping on bit for bit as this space
+        would. Post-step callbacks are not copied (as in pymunk).
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> s.gravity = 0, -10
+        >>> b = tamias2d.Body(1, 1)
+        >>> s.add(b, tamias2d.Circle(b, 1))
+        >>> t = s.copy()
+        >>> s.step(0.1); t.step(0.1)
+        >>> next(iter(t.bodies)).position == b.position
+        True
+        """
+        return _snapshot().space_deepcopy(self, {})
 
     def __repr__(self):
         return f"Space(bodies={len(self._bodies)}, shapes={len(self._shapes)})"

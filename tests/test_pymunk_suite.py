@@ -16,6 +16,7 @@ EXPECTED_TO_PASS = {
     "test_body.py": [
         "UnitTestBody.test_constraints",
         "UnitTestBody.test_coordinate_conversion",
+        "UnitTestBody.test_custom_callbacks_can_be_reinstalled",
         "UnitTestBody.test_dynamic",
         "UnitTestBody.test_each_arbiters",
         "UnitTestBody.test_force",
@@ -26,10 +27,12 @@ EXPECTED_TO_PASS = {
         "UnitTestBody.test_mass_moment_from_shape",
         "UnitTestBody.test_moment",
         "UnitTestBody.test_pickle",
+        "UnitTestBody.test_pickle_circular_ref",
         "UnitTestBody.test_position_func",
         "UnitTestBody.test_properties",
         "UnitTestBody.test_repr",
         "UnitTestBody.test_reset_callback_getters",
+        "UnitTestBody.test_reset_callbacks_stay_reset_after_copy",
         "UnitTestBody.test_shapes",
         "UnitTestBody.test_sleep",
         "UnitTestBody.test_sleep_with_group",
@@ -42,6 +45,16 @@ EXPECTED_TO_PASS = {
         "UnitTestBB.testMerge",
         "UnitTestBB.testMethods",
         "UnitTestBB.testPickle",
+    ],
+    "test_common.py": [
+        "UnitTestBugs.testGC",
+        "UnitTestBugs.testManyBoxCrash",
+        "UnitTestBugs.testNoStaticShape",
+        "UnitTestBugs.testWeakKeysView",
+        "UnitTestBugs.testX",
+        "UnitTestGeneral.testAreaHelpers",
+        "UnitTestGeneral.testGeneral",
+        "UnitTestGeneral.testMomentHelpers",
     ],
     "test_shape.py": [
         "UnitTestCircle.testCircleBB",
@@ -112,6 +125,10 @@ EXPECTED_TO_PASS = {
         "UnitTestArbiter.testSurfaceVelocity",
         "UnitTestArbiter.testTotalKE",
     ],
+    # Left out of test_space.py on purpose: testPickleCachedArbiters expects
+    # pymunk's copy to lose the bodies' pending bias velocities (the copy then
+    # lags one step behind the original); tamias2d's copy steps on exactly as
+    # the original does (tests/test_copy_pickle.py).
     "test_space.py": [
         "UnitTestSpace.testAddBodyAsserts",
         "UnitTestSpace.testAddConstraintAsserts",
@@ -128,9 +145,11 @@ EXPECTED_TO_PASS = {
         "UnitTestSpace.testCollisionHandlerRemoveAfterSeparate",
         "UnitTestSpace.testCollisionHandlerRemoveInStep",
         "UnitTestSpace.testCollisionHandlerSeparate",
+        "UnitTestSpace.testCopyMethods",
         "UnitTestSpace.testDebugDraw",
         "UnitTestSpace.testDefaultCollisionHandler",
         "UnitTestSpace.testDeleteSpaceWithObjects",
+        "UnitTestSpace.testPicklePymunkVersionCheck",
         "UnitTestSpace.testPointQuery",
         "UnitTestSpace.testPointQueryNearest",
         "UnitTestSpace.testPointQueryNearestWithShapeFilter",
@@ -153,7 +172,11 @@ EXPECTED_TO_PASS = {
         "UnitTestSpace.testSpatialHash",
         "UnitTestSpace.testStaticPointQueries",
         "UnitTestSpace.testStaticSegmentQueries",
+        "UnitTestSpace.testThreaded",
         "UnitTestSpace.testWildcardCollisionHandler",
+        "UnitTestSpace.test_each_phase_keeps_its_data",
+        "UnitTestSpace.test_shared_data_references_are_copied_together",
+        "UnitTestSpace.test_state_without_handler_data",
     ],
     "test_constraint.py": [
         "UnitTestConstraint.testA",

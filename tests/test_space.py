@@ -92,11 +92,24 @@ def test_bad_property_values(name, value, exc):
     assert getattr(s, name) == before
 
 
-def test_threads_stay_one():
+def test_threads_as_pymunk_but_one_solver_thread():
+    # pymunk's threaded space keeps the count asked (0 -> 1, at most 2); a
+    # space that is not threaded stays at 1. tamias2d solves on one thread
+    # whatever the count, so the motion is the same.
     s = Space(threaded=True)
-    s.threads = 2
-    assert s.threads == 1
-    s.step(0.1)
+    for asked, kept in ((2, 2), (5, 2), (0, 1), (1, 1), (2, 2)):
+        s.threads = asked
+        assert s.threads == kept
+    plain = Space()
+    plain.threads = 2
+    assert plain.threads == 1
+    for space in (s, plain):
+        space.gravity = 0, -100
+        b = Body(1, 10)
+        space.add(b, Circle(b, 1), Segment(space.static_body, (-10, -1), (10, -1), 0.5))
+        for _ in range(30):
+            space.step(0.02)
+    assert list(s.bodies)[0].position == list(plain.bodies)[0].position
 
 
 def test_static_body():
