@@ -839,6 +839,15 @@ cdef class Body:
                               "(during a step or a query); use a post-step callback.")
         if t != CP_BODY_TYPE_DYNAMIC:
             _check_constraints_allow_type(self)
+        if (t != <int>cpBodyGetType(&self._body) and cpBodyIsSleeping(&self._body)
+                and cpBodyGetType(&self._body) == CP_BODY_TYPE_DYNAMIC):
+            # Wake the component first. Munk2D's cpBodySetType changes the
+            # type and only then calls cpBodyActivate, which does nothing for
+            # a body that is no longer dynamic: the body stays linked in its
+            # sleeping component while it moves to another array, and the
+            # next step loops forever in FloodFillComponent (pymunk hangs or
+            # segfaults there). Waking is what cpBodySetType means to do.
+            cpBodyActivate(&self._body)
         cpBodySetType(&self._body, <cpBodyType>t)
 
     @property
