@@ -447,6 +447,24 @@ cdef int _check_invertible(double x, str what) except -1:
     return 0
 
 
+cdef int _check_no_shape_in_a_space(cpBody *body) except -1:
+    # Shapes in a space the body is not in (the body was removed, or added
+    # to another space): Munk2D files a shape in the static or the dynamic
+    # index by its body's type, and cpSpaceRemoveShape looks it up by the
+    # type the body has then. Changing the type now would not move those
+    # shapes (or would move them in the wrong space's index), so a later
+    # removal misses them and leaves a freed shape in an index (pymunk
+    # segfaults).
+    cdef cpShape *shape = body.shapeList
+    while shape != NULL:
+        if shape.space != NULL and shape.space != body.space:
+            raise IllegalBody("Cannot change the type of a body while some of its shapes are "
+                              "in a space the body is not in: add the body to that space "
+                              "first, or remove the shapes.")
+        shape = shape.next
+    return 0
+
+
 cdef inline double _finite_float(object o, str what) except? -1.0:
     cdef double x = o
     if not _finite(x):
@@ -839,6 +857,8 @@ cdef class Body:
                               "(during a step or a query); use a post-step callback.")
         if t != CP_BODY_TYPE_DYNAMIC:
             _check_constraints_allow_type(self)
+        if t != <int>cpBodyGetType(&self._body):
+            _check_no_shape_in_a_space(&self._body)
         if (t != <int>cpBodyGetType(&self._body) and cpBodyIsSleeping(&self._body)
                 and cpBodyGetType(&self._body) == CP_BODY_TYPE_DYNAMIC):
             # Wake the component first. Munk2D's cpBodySetType changes the
