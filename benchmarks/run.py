@@ -6,8 +6,9 @@
     python benchmarks/run.py --clock cpu         # CPU time: steadier on a busy machine
 
 Sections (``--only`` picks some, comma-separated):
-  scenes      step time of seven scenes at several sizes (pyramid, stack,
-              rain, drum, static field, sparse field, callback rain);
+  scenes      step time of eight scenes at several sizes (pyramid, stack,
+              rain, drum, static field, sparse field, sleeping wall,
+              callback rain);
   scaling     step time against body count, 100 to 30,000 bodies;
   accuracy    speed against error: scenes with known answers swept over the
               time step and the solver iterations;
