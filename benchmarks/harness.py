@@ -165,9 +165,10 @@ class Progress:
 
 def _terminal_columns(stream):
     try:
-        return os.get_terminal_size(stream.fileno()).columns
+        cols = os.get_terminal_size(stream.fileno()).columns
     except (OSError, AttributeError, ValueError):
-        return 100
+        cols = 0
+    return cols if cols >= 20 else 100   # a terminal that reports no size
 
 
 def cpu_model():
