@@ -447,6 +447,22 @@ cdef int _check_invertible(double x, str what) except -1:
     return 0
 
 
+cdef bint _in_a_space(cpBody *body) noexcept:
+    # The body, or one of its shapes, is in a space. A shape stays in the
+    # space when only its body is removed, and the solver then uses the
+    # body's inverse mass: a mass or moment of 0 there means m_inv = inf and
+    # a NaN body at the first contact (pymunk too).
+    cdef cpShape *shape
+    if body.space != NULL:
+        return True
+    shape = body.shapeList
+    while shape != NULL:
+        if shape.space != NULL:
+            return True
+        shape = shape.next
+    return False
+
+
 cdef int _check_no_shape_in_a_space(cpBody *body) except -1:
     # Shapes in a space the body is not in (the body was removed, or added
     # to another space): Munk2D files a shape in the static or the dynamic
@@ -659,7 +675,7 @@ cdef class Body:
             raise IllegalBody("You cannot set the mass of kinematic or static bodies.")
         if not (0.0 <= m < INFINITY):
             raise IllegalBody("Mass must be non-negative and finite, got %r." % m)
-        if self._body.space != NULL and not (m > 0.0):
+        if not (m > 0.0) and _in_a_space(&self._body):
             raise IllegalBody("Dynamic bodies must have mass > 0 if they are attached to a Space.")
         _check_invertible(m, "Mass")
         cpBodySetMass(&self._body, m)
@@ -684,7 +700,7 @@ cdef class Body:
         cdef double i = moment
         if not (i >= 0.0):
             raise IllegalBody("Moment of inertia must be non-negative, got %r." % i)
-        if self._body.space != NULL and not (i > 0.0):
+        if not (i > 0.0) and _in_a_space(&self._body):
             raise IllegalBody("Dynamic bodies must have moment > 0 if they are attached to a Space.")
         _check_invertible(i, "Moment of inertia")
         cpBodySetMoment(&self._body, i)

@@ -1132,3 +1132,87 @@ def test_adding_a_body_whose_shapes_are_in_another_space_is_refused():
     a.remove(b)
     with pytest.raises((AlreadyInSpace, IllegalBody, ValueError)):
         b_space.add(b)
+
+
+# -- zero mass on a body outside the space whose shapes are in it ------------------------------
+
+@pytest.mark.parametrize("attr", ["mass", "moment"])
+@isolated(timeout=30)
+def test_zero_mass_on_a_removed_body_whose_shapes_stay(attr):
+    # Bug (fixed in body.pyx, found by tests/test_fuzz.py, seed 2019): after
+    # space.remove(body) the body's shapes stay in the space and still
+    # collide with the body's inverse mass; the setters allowed a mass or
+    # moment of 0 there (the body is 'not in a space'), m_inv became inf and
+    # the body NaN at the next contact (pymunk too). Now IllegalBody, as for
+    # a body in a space.
+    s = Space()
+    s.gravity = 0, -100
+    s.add(Segment(s.static_body, (-100, 0), (100, 0), 1))
+    b = Body(1, 10)
+    b.position = 0, 5
+    s.add(b, Circle(b, 4.5))
+    s.remove(b)
+    with pytest.raises(IllegalBody):
+        setattr(b, attr, 0)
+    for _ in range(20):
+        s.step(1 / 60)
+    assert finite(*body_state(b))
+    for shape in list(b.shapes):
+        s.remove(shape)
+    setattr(b, attr, 0)  # nothing of it in a space any more: allowed again
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "space.pyx: the step checks the mass of the bodies in the space, not of the bodies of "
+    "shapes in it whose body was removed; a mass of 0 reached through the shapes' density "
+    "gives m_inv = inf and NaN (pymunk too). Reproducer: s = Space(); s.gravity = 0, -100; "
+    "floor segment; b = Body(); c = Circle(b, 4.5); c.density = 1; b.position = 0, 5; "
+    "s.add(b, c); s.remove(b); c.density = 0; step 20 x 1/60 -> b.velocity (nan, nan). "
+    "Fix: Space._check_bodies also checks the bodies of the space's shapes."))
+@isolated(timeout=30)
+def test_zero_density_on_a_removed_body_whose_shapes_stay():
+    s = Space()
+    s.gravity = 0, -100
+    s.add(Segment(s.static_body, (-100, 0), (100, 0), 1))
+    b = Body()
+    c = Circle(b, 4.5)
+    c.density = 1
+    b.position = 0, 5
+    s.add(b, c)
+    s.remove(b)
+    try:
+        c.density = 0
+        for _ in range(20):
+            s.step(1 / 60)
+    except CLEAR:
+        return
+    assert finite(*body_state(b))
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "arbiter.pyx: Arbiter.friction, .restitution and .surface_velocity accept NaN, infinite "
+    "and negative values inside callbacks; friction NaN or restitution inf give NaN bodies, "
+    "friction -1 pushes a resting body sideways (pymunk accepts them too). Reproducer: a "
+    "circle resting on a segment, s.on_collision(None, None, pre_solve=lambda arb, sp, d: "
+    "setattr(arb, 'friction', math.nan)); step 10 x 1/60 -> body (nan, nan). Fix: the "
+    "setters refuse non-finite values and negative friction/restitution (ValueError), as "
+    "Shape.friction and Shape.elasticity do."))
+@pytest.mark.parametrize("attr, value", [("friction", nan), ("friction", inf), ("friction", -1.0),
+                                         ("restitution", nan), ("restitution", inf),
+                                         ("restitution", -1.0), ("surface_velocity", (nan, 0.0)),
+                                         ("surface_velocity", (inf, 0.0))])
+@isolated(timeout=30)
+def test_arbiter_setters_refuse_bad_values(attr, value):
+    s, b, c, floor = _touching_scene()
+    refused = []
+
+    def pre(arb, space, data):
+        try:
+            setattr(arb, attr, value)
+        except CLEAR:
+            refused.append(True)
+
+    s.on_collision(None, None, pre_solve=pre)
+    for _ in range(3):
+        s.step(1 / 60)
+    assert refused
