@@ -382,6 +382,56 @@ def build_elastic_gas(mod):
     return Scene(space)
 
 
+def build_determinism(mod, count=60, spatial_hash=False, sleeping=False):
+    """The scene of tests/test_determinism.py: `count` circles, boxes,
+    rounded polygons and segments with seeded random sizes, materials and
+    velocities, tumbling in a closed box stirred by a turning kinematic
+    paddle (contacts of every shape pair, restitution, friction)."""
+    import random
+    rng = random.Random(7)
+    space = _space(mod)
+    if spatial_hash:
+        space.use_spatial_hash(30.0, 2000)
+    if sleeping:
+        space.sleep_time_threshold = 0.5
+    for a, b in (((-250, 0), (250, 0)), ((250, 0), (250, 500)), ((-250, 500), (-250, 0)),
+                 ((-250, 500), (250, 500))):
+        seg = mod.Segment(space.static_body, a, b, 4.0)
+        seg.friction = 0.7
+        seg.elasticity = 0.3
+        space.add(seg)
+    paddle = mod.Body(body_type=mod.Body.KINEMATIC)
+    paddle.position = 0, 120
+    paddle.angular_velocity = 1.3
+    blade = mod.Poly.create_box(paddle, (220, 10), 2.0)
+    blade.friction = 0.5
+    space.add(paddle, blade)
+    for i in range(count):
+        kind = i % 4
+        mass = rng.uniform(0.5, 3.0)
+        size = rng.uniform(6.0, 16.0)
+        body = mod.Body(mass, box_moment(mass, size, size))
+        if kind == 0:
+            shape = mod.Circle(body, size / 2, (rng.uniform(-1, 1), 0.0))
+        elif kind == 1:
+            shape = mod.Poly.create_box(body, (size, size * rng.uniform(0.5, 1.5)))
+        elif kind == 2:
+            n = rng.randint(3, 8)
+            shape = mod.Poly(body, [(size * math.cos(6.283185307179586 * k / n + rng.random() * 0.3),
+                                     size * math.sin(6.283185307179586 * k / n))
+                                    for k in range(n)], None, rng.choice([0.0, 1.0]))
+        else:
+            shape = mod.Segment(body, (-size, 0), (size, rng.uniform(-3, 3)), rng.uniform(1, 3))
+        body.position = rng.uniform(-220, 220), rng.uniform(220, 480)
+        body.angle = rng.uniform(-3, 3)
+        body.velocity = rng.uniform(-100, 100), rng.uniform(-100, 100)
+        body.angular_velocity = rng.uniform(-2, 2)
+        shape.friction = rng.uniform(0.2, 1.0)
+        shape.elasticity = rng.uniform(0.0, 0.6)
+        space.add(body, shape)
+    return Scene(space)
+
+
 # -- judging ----------------------------------------------------------------------------
 
 @dataclass
