@@ -1000,6 +1000,13 @@ cdef int _check_massive(const cpShapeMassInfo *info, cpFloat mass) except -1:
     if mass > 0.0 and not _mass_info_finite(info):
         raise IllegalShape("a degenerate shape (a polygon without area) cannot carry mass: "
                            "its moment or center of gravity is undefined")
+    # The body's inverse mass comes from this: an infinite mass (a huge
+    # density times the area overflows) would make the body kinematic, one
+    # whose inverse overflows (5e-324) a NaN body at its first contact.
+    if not (mass < INFINITY):
+        raise IllegalShape("the shape's mass would not be finite (density x area overflows)")
+    if mass > 0.0 and not (1.0 / mass < INFINITY):
+        raise IllegalShape("the shape's mass %r is too small: its inverse is not finite" % mass)
     return 0
 
 
