@@ -7,7 +7,7 @@ material values. The space creates, caches and recycles arbiters; Python code
 sees them only as :class:`Arbiter` views handed to collision callbacks and
 ``Body.each_arbiter``.
 """
-from libc.math cimport INFINITY
+from libc.math cimport INFINITY, isfinite
 from tamias2d._config cimport (cpFloat, cpBool, cpHashValue, cpCollisionType,
     CP_HASH_PAIR_ORDERED, CP_WILDCARD_COLLISION_TYPE, CP_MAX_CONTACTS_PER_ARBITER)
 from tamias2d._structs cimport (cpArbiter, cpArbiterThread, cpBody, cpShape, cpSpace,
@@ -20,6 +20,15 @@ from tamias2d.vector cimport (cpVect, cpv, cpvadd, cpvsub, cpvneg, cpvmult, cpvd
 from tamias2d.collision cimport (k_scalar, normal_relative_velocity, relative_velocity,
     apply_impulses, apply_bias_impulses, ContactPointSet, contact_point_set_from_cp)
 from tamias2d.errors import Tamias2DError
+
+
+cdef cpFloat _coefficient_arg(object value, str what) except? -1.0:
+    # Finite and >= 0, as Shape.friction / Shape.elasticity: NaN or inf here
+    # turns into NaN impulses, a negative friction pushes a resting body.
+    cdef cpFloat x = value
+    if not (x >= 0.0 and x < INFINITY):
+        raise ValueError(f"{what} must be a finite number >= 0, got {value!r}")
+    return x
 
 
 # -- the empty handler ----------------------------------------------------------
@@ -510,7 +519,7 @@ cdef class Arbiter:
 
     @restitution.setter
     def restitution(self, restitution):
-        self._get().e = restitution
+        self._get().e = _coefficient_arg(restitution, "restitution")
 
     @property
     def friction(self):
@@ -535,7 +544,7 @@ cdef class Arbiter:
 
     @friction.setter
     def friction(self, friction):
-        self._get().u = friction
+        self._get().u = _coefficient_arg(friction, "friction")
 
     @property
     def surface_velocity(self):
@@ -560,6 +569,9 @@ cdef class Arbiter:
     @surface_velocity.setter
     def surface_velocity(self, velocity):
         cdef cpVect v = cpv_from_object(velocity)
+        # a non-finite surface velocity reaches the bodies as NaN impulses
+        if not (isfinite(v.x) and isfinite(v.y)):
+            raise ValueError(f"surface_velocity must be finite, got ({v.x!r}, {v.y!r})")
         cpArbiterSetSurfaceVelocity(self._get(), v)
 
     @property

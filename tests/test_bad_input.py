@@ -1201,20 +1201,17 @@ def test_zero_density_on_a_removed_body_whose_shapes_stay():
     assert finite(*body_state(b))
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "arbiter.pyx: Arbiter.friction, .restitution and .surface_velocity accept NaN, infinite "
-    "and negative values inside callbacks; friction NaN or restitution inf give NaN bodies, "
-    "friction -1 pushes a resting body sideways (pymunk accepts them too). Reproducer: a "
-    "circle resting on a segment, s.on_collision(None, None, pre_solve=lambda arb, sp, d: "
-    "setattr(arb, 'friction', math.nan)); step 10 x 1/60 -> body (nan, nan). Fix: the "
-    "setters refuse non-finite values and negative friction/restitution (ValueError), as "
-    "Shape.friction and Shape.elasticity do."))
 @pytest.mark.parametrize("attr, value", [("friction", nan), ("friction", inf), ("friction", -1.0),
                                          ("restitution", nan), ("restitution", inf),
                                          ("restitution", -1.0), ("surface_velocity", (nan, 0.0)),
                                          ("surface_velocity", (inf, 0.0))])
 @isolated(timeout=30)
 def test_arbiter_setters_refuse_bad_values(attr, value):
+    # Bug (fixed in arbiter.pyx): Arbiter.friction, .restitution and
+    # .surface_velocity accepted NaN, infinite and negative values in
+    # callbacks (pymunk too): NaN bodies, or a resting body pushed sideways by
+    # a negative friction. They are now refused (ValueError), as the Shape
+    # setters refuse them.
     s, b, c, floor = _touching_scene()
     refused = []
 
