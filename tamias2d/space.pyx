@@ -1864,7 +1864,11 @@ cdef class Space:
 
     @collision_slop.setter
     def collision_slop(self, value):
-        self._space.collisionSlop = value
+        cdef double slop = value
+        # an infinite slop gives the contacts an infinite bias: NaN bodies
+        if not isfinite(slop):
+            raise ValueError(f"collision_slop must be a finite number, not {value!r}")
+        self._space.collisionSlop = slop
 
     @property
     def collision_bias(self):

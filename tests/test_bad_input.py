@@ -462,13 +462,11 @@ def test_space_setters_keep_the_state_finite(attr, value):
         assert finite(*body_state(b)), f"{attr}={value!r}: {b} went non-finite"
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "space.pyx: collision_slop accepts -inf (and any value); a contact then gets an infinite "
-    "bias and the bodies a NaN state (pymunk does the same). Reproducer: s = Space(); "
-    "s.gravity = 0, -100; floor + a resting circle; s.collision_slop = -math.inf; s.step(1/60) "
-    "twice -> circle.position is (nan, nan). Fix: refuse a non-finite slop (ValueError)."))
 @isolated(timeout=60)
 def test_collision_slop_minus_infinity_is_refused_or_harmless():
+    # Bug (fixed in space.pyx): collision_slop accepted -inf; the contacts got
+    # an infinite bias and the bodies a NaN state at the second step (pymunk
+    # too). A non-finite slop is now refused (ValueError).
     s, bodies = small_scene()
     try:
         s.collision_slop = -inf
