@@ -2380,8 +2380,9 @@ cdef class Space:
         >>> [h.alpha for h in s.segment_query((-20, 0), (20, 0), 0, tamias2d.ShapeFilter())]
         [0.25]
         """
-        cdef cpVect a = cpv_from_object(start)
-        cdef cpVect b = cpv_from_object(end)
+        # non-finite end points: the spatial hash's cell walk never ends
+        cdef cpVect a = cpv_from_object_finite(start, "start")
+        cdef cpVect b = cpv_from_object_finite(end, "end")
         cdef cpFloat r = radius
         cdef cpShapeFilter f = _filter_from_object(shape_filter)
         cdef QueryHits hits
@@ -2408,8 +2409,9 @@ cdef class Space:
         >>> s.segment_query_first((-20, 0), (20, 0), 0, tamias2d.ShapeFilter()).point
         Vec2d(-10.0, 0.0)
         """
-        cdef cpVect a = cpv_from_object(start)
-        cdef cpVect b = cpv_from_object(end)
+        # non-finite end points: the spatial hash's cell walk never ends
+        cdef cpVect a = cpv_from_object_finite(start, "start")
+        cdef cpVect b = cpv_from_object_finite(end, "end")
         cdef cpFloat r = radius
         cdef cpShapeFilter f = _filter_from_object(shape_filter)
         cdef cpSegmentQueryInfo info

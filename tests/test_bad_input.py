@@ -1016,16 +1016,12 @@ def test_shape_mass_that_is_not_invertible_or_overflows_is_refused(attr, value):
     assert finite(*body_state(b)) and b.mass == 1
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "space.pyx (with _spacehash.pyx): a segment query with a non-finite end point never "
-    "returns when the space uses the spatial hash (the cell walk has no end; pymunk hangs "
-    "the same way). Reproducer: s = Space(); s.use_spatial_hash(10, 100); b = Body(1, 10); "
-    "s.add(b, Circle(b, 5)); s.segment_query_first((0, 434), (0, math.inf), 1, "
-    "ShapeFilter()) -> hangs (segment_query too). Fix: refuse non-finite end points in "
-    "Space.segment_query / segment_query_first (IllegalVector), as the body setters do."))
 @pytest.mark.parametrize("which", ["segment_query", "segment_query_first"])
 @isolated(timeout=3)
 def test_segment_query_to_infinity_with_the_spatial_hash(which):
+    # Bug (fixed in space.pyx): with the spatial hash, a segment query with a
+    # non-finite end point never returned (the cell walk has no end; pymunk
+    # hangs too). Non-finite end points are now refused (IllegalVector).
     s = Space()
     s.use_spatial_hash(10.0, 100)
     b = Body(1, 10)
