@@ -1992,6 +1992,12 @@ cdef class Space:
             raise AlreadyInSpace("Body already added to this space.")
         if body.space is not None:
             raise AlreadyInSpace("Body already added to another space.")
+        # Shapes left in another space by remove(body): once the body sleeps
+        # here Munk2D would file them in this space's indexes as well.
+        for shape in body.shapes:
+            if shape.space is not None and shape.space is not self:
+                raise AlreadyInSpace("The body's shapes are in another space: remove them "
+                                     "from it before adding the body to this space.")
         body._space = weakref.ref(self)
         if cpSpaceAddBody(&self._space, &body._body) == NULL:
             body._space = None

@@ -1107,30 +1107,28 @@ def test_type_change_of_a_body_whose_shapes_are_in_a_space_without_it(new_type):
     gc.collect()
     assert s.point_query((0, 0), 1, ShapeFilter()) == []
     b.body_type = new_type  # its shape has left the space too: allowed
-    # the body in another space than its shape: refused as well
+    # the body in another space than its shape: adding it there is refused
+    # (test_adding_a_body_whose_shapes_are_in_another_space_is_refused), and
+    # the type change still is
     other = Space()
     b2 = Body(1, 10)
     c2 = Circle(b2, 5)
     s.add(b2, c2)
     s.remove(b2)
-    other.add(b2)
+    with pytest.raises(AlreadyInSpace):
+        other.add(b2)
     with pytest.raises(IllegalBody):
         b2.body_type = new_type
     for sp in (s, other):
         sp.step(0.01)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "space.pyx: Space.add accepts a body whose shapes are in another space (pymunk too). "
-    "When that body falls asleep, Munk2D moves its shapes between the indexes of the body's "
-    "space, where they are not; the shapes end up in two spaces' indexes, and once freed a "
-    "query reads freed memory (pymunk segfaults). Reproducer: A, B = Space(), Space(); "
-    "B.sleep_time_threshold = 0.1; b = Body(1, 10); c = Circle(b, 5); A.add(b, c); "
-    "A.remove(b); B.add(b); step B 30 x 0.05; A.remove(c); del c; gc.collect(); "
-    "B.point_query((0, 0), 1, ShapeFilter()) returns the freed shape. Fix: refuse in "
-    "Space.add a body any of whose shapes is in another space (AlreadyInSpace)."))
 @isolated(timeout=30)
 def test_adding_a_body_whose_shapes_are_in_another_space_is_refused():
+    # Bug (fixed in space.pyx): Space.add accepted a body whose shapes were in
+    # another space (pymunk too); once the body slept, Munk2D filed those
+    # shapes in this space's indexes as well, and after they were freed a
+    # query read freed memory (pymunk segfaults). Now AlreadyInSpace.
     a, b_space = Space(), Space()
     b = Body(1, 10)
     c = Circle(b, 5)
