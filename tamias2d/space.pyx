@@ -2184,6 +2184,17 @@ cdef class Space:
                 raise IllegalBody(
                     f"Dynamic bodies must have a mass > 0 and < inf and moment > 0. "
                     f"{b!r} has mass {body.m}, moment {body.i}.")
+        # Bodies removed from the space whose shapes stayed still collide
+        # through those shapes (a density of 0 can reach them there).
+        body = NULL
+        cpSpatialIndexEach(self._space.dynamicShapes, _findOrphanWithBadMass, &body)
+        if body == NULL:
+            cpSpatialIndexEach(self._space.staticShapes, _findOrphanWithBadMass, &body)
+        if body != NULL:
+            b = <object>body.userData if body.userData != NULL else None
+            raise IllegalBody(
+                f"Dynamic bodies must have a mass > 0 and < inf and moment > 0. {b!r} (removed "
+                f"from the space, its shapes still in it) has mass {body.m}, moment {body.i}.")
         return 0
 
     def step(self, dt):
@@ -2655,6 +2666,19 @@ cdef class Space:
 
     def __repr__(self):
         return f"Space(bodies={len(self._bodies)}, shapes={len(self._shapes)})"
+
+
+cdef void _findOrphanWithBadMass(void *obj, void *data) noexcept nogil:
+    # Keeps in *data the first dynamic body outside the space (removed, its
+    # shapes left in) whose mass or moment the solver cannot invert.
+    cdef cpBody *body = (<cpShape *>obj).body
+    cdef cpBody **found = <cpBody **>data
+    if found[0] != NULL or body == NULL or body.space != NULL:
+        return
+    if cpBodyGetType(body) != CP_BODY_TYPE_DYNAMIC:
+        return
+    if not (body.m > 0.0 and body.m < INFINITY and body.i > 0.0):
+        found[0] = body
 
 
 cdef void _collectShape(void *obj, void *data) noexcept with gil:

@@ -1166,15 +1166,12 @@ def test_zero_mass_on_a_removed_body_whose_shapes_stay(attr):
     setattr(b, attr, 0)  # nothing of it in a space any more: allowed again
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "space.pyx: the step checks the mass of the bodies in the space, not of the bodies of "
-    "shapes in it whose body was removed; a mass of 0 reached through the shapes' density "
-    "gives m_inv = inf and NaN (pymunk too). Reproducer: s = Space(); s.gravity = 0, -100; "
-    "floor segment; b = Body(); c = Circle(b, 4.5); c.density = 1; b.position = 0, 5; "
-    "s.add(b, c); s.remove(b); c.density = 0; step 20 x 1/60 -> b.velocity (nan, nan). "
-    "Fix: Space._check_bodies also checks the bodies of the space's shapes."))
 @isolated(timeout=30)
 def test_zero_density_on_a_removed_body_whose_shapes_stay():
+    # Bug (fixed in space.pyx): the step checked the mass of the bodies in the
+    # space only, not of the bodies of shapes left in it by remove(body); a
+    # mass of 0 reached through the density gave m_inv = inf and NaN bodies
+    # (pymunk too). The step now checks those bodies too (IllegalBody).
     s = Space()
     s.gravity = 0, -100
     s.add(Segment(s.static_body, (-100, 0), (100, 0), 1))
