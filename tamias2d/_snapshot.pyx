@@ -51,25 +51,24 @@ physics does not depend on it.
 >>> next(iter(twin.bodies)).position == b.position
 True
 """
-cimport cython
 from libc.stdlib cimport malloc, free, qsort
-from libc.string cimport memcpy, memset
-from libc.stdint cimport uintptr_t, int32_t, uint32_t, uint64_t, uint8_t
+from libc.string cimport memcpy, memset, memcmp
+from libc.stdint cimport uintptr_t, int32_t, uint32_t, uint64_t
 from cpython.bytes cimport PyBytes_FromStringAndSize, PyBytes_AS_STRING, PyBytes_GET_SIZE
 
 import copy as _copy
 import copyreg
 import weakref
 
-from tamias2d._config cimport (cpFloat, cpBool, cpHashValue, cpCollisionType, cpTimestamp,
-    CP_HASH_PAIR, CP_HASH_PAIR_ORDERED, CP_BUFFER_BYTES, CP_POLY_SHAPE_INLINE_ALLOC)
+from tamias2d._config cimport (cpFloat, cpHashValue, cpCollisionType, CP_HASH_PAIR,
+    CP_BUFFER_BYTES, CP_POLY_SHAPE_INLINE_ALLOC)
 from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, cpArray,
     cpHashSet, cpHashSetBin, cpHashSetEqlFunc, cpCollisionHandler, cpContactBufferHeader,
     cpSpatialIndex, cpShapeClass, cpConstraint, cpCircleShape, cpSegmentShape, cpPolyShape, cpSplittingPlane,
     cpArbiterState)
-from tamias2d.vector cimport cpVect, cpBB, vec2d_from_cpv
-from tamias2d._containers cimport (cpcalloc, cprealloc, cpfree, cpArrayPush, cpHashSetNew,
-    cpHashSetFree, cpHashSetInsert, cpHashSetFind, cpTakeOutOfMemory)
+from tamias2d.vector cimport vec2d_from_cpv
+from tamias2d._containers cimport (cpcalloc, cprealloc, cpArrayPush, cpHashSetNew,
+    cpHashSetFree, cpHashSetInsert, cpTakeOutOfMemory)
 from tamias2d._bbtree cimport cpBBTree, Node, Pair, cpBBTreeClass
 from tamias2d._spacehash cimport cpSpaceHash, cpHandle, cpSpaceHashBin, cpSpaceHashClass
 from tamias2d.body cimport (Body, cpBodyUpdateVelocity, cpBodyUpdatePosition,
@@ -1451,8 +1450,9 @@ cdef int _parse(bytes blob, Parsed *p) except -1:
     r.len = <size_t>PyBytes_GET_SIZE(blob)
     r.pos = 0
     _fill_header(&expected)
+    memset(&got, 0, sizeof(Header))
     r_get(&r, &got, sizeof(Header))
-    if memcmp_(&got, &expected, sizeof(Header)):
+    if memcmp(&got, &expected, sizeof(Header)):
         raise CopyError("the snapshot was made by another version or build of tamias2d "
                         "(record layout differs)")
     r_get(&r, &p.s, sizeof(SpaceRec))
@@ -1579,16 +1579,6 @@ cdef int _parse(bytes blob, Parsed *p) except -1:
     if r.pos != r.len:
         raise CopyError("the snapshot of the space is corrupt (trailing data)")
     _check_broadphase(p, ns)
-    return 0
-
-
-cdef int memcmp_(const void *a, const void *b, size_t n) noexcept nogil:
-    cdef const unsigned char *x = <const unsigned char *>a
-    cdef const unsigned char *y = <const unsigned char *>b
-    cdef size_t i
-    for i in range(n):
-        if x[i] != y[i]:
-            return 1
     return 0
 
 

@@ -10,11 +10,15 @@ throughput is measured by benchmarks/bench_services.py.
 """
 import threading
 
+import pytest
+
 import tamias2d
 import tamias2d.batch
 from tamias2d import _containers
 
 import scenes
+
+pytest.importorskip("numpy")   # the comparisons read bodies through tamias2d.batch
 
 FIELDS = ("position", "angle", "velocity", "angular_velocity", "force", "torque")
 
