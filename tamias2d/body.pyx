@@ -528,6 +528,10 @@ cdef int _check_can_sleep(Body self, Body group) except -1:
         raise NotInSpace("Body not added to space")
     if cpBodyGetType(&self._body) != CP_BODY_TYPE_DYNAMIC:
         raise IllegalBody("Non-dynamic bodies cannot be put to sleep.")
+    if not (self._body.m > 0.0 and self._body.i > 0.0):
+        # The step refuses a massless dynamic body, but a sleeping one is out
+        # of its reach; woken by a contact it would turn NaN (inverse mass inf).
+        raise IllegalBody("A dynamic body with mass or moment 0 cannot be put to sleep.")
     if space.locked:
         raise SpaceLocked("Bodies cannot be put to sleep during a query or a step; "
                           "use a post-step callback.")

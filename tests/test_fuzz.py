@@ -26,6 +26,7 @@ import random
 import subprocess
 import sys
 import traceback
+import weakref
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -103,6 +104,8 @@ class Fuzzer:
         self.counts = {}
         self.expected_errors = 0
         self.hashing = False
+        self.names = weakref.WeakKeyDictionary()
+        self.serial = 0
         floor = mod.Segment(self.space.static_body, (-600, -300), (600, -300), 5)
         floor.friction = 0.8
         self.space.add(floor)
@@ -115,6 +118,17 @@ class Fuzzer:
 
     def pick(self, seq):
         return self.r.choice(seq) if seq else None
+
+    def label(self, obj):
+        """A name for an object in the log (b3, s7, ...); weakly held, so
+        naming an object does not keep it alive."""
+        if not isinstance(obj, (self.mod.Body, self.mod.Shape)):
+            return repr(obj)
+        name = self.names.get(obj)
+        if name is None:
+            self.serial += 1
+            name = self.names[obj] = f"{'b' if isinstance(obj, self.mod.Body) else 's'}{self.serial}"
+        return name
 
     def attempt(self, fn, *args):
         """Call fn; a clear exception (or our own Boom) is fine."""
@@ -143,6 +157,7 @@ class Fuzzer:
                 self.attempt(setattr, b, "velocity", _vec(self.r, "vel"))
                 self.attempt(setattr, b, "angular_velocity", _values(self.r, "angle"))
             self.bodies.append(b)
+            self.note(f"  -> {self.label(b)}")
 
     def new_shape(self):
         m = self.mod
@@ -186,6 +201,7 @@ class Fuzzer:
             if r.random() < 0.1:
                 self.attempt(setattr, s, "sensor", True)
             self.shapes.append(s)
+            self.note(f"  -> {self.label(s)} on {self.label(body)}")
 
     def add(self):
         objs = [self.r.choice(self.bodies + self.shapes) for _ in range(self.r.choice([1, 1, 2, 3]))
@@ -196,19 +212,22 @@ class Fuzzer:
                 objs = [s.body, s]
         if self.r.random() < 0.03:
             objs.append(self.r.choice([None, 3, "x", self.space.static_body]))
-        self.note(f"  add {[type(o).__name__ for o in objs]}")
+        self.note(f"  add {[self.label(o) for o in objs]}")
         self.attempt(self.space.add, *objs)
 
     def remove(self):
         objs = [self.r.choice(self.bodies + self.shapes) for _ in range(self.r.choice([1, 1, 2]))
                 if self.bodies or self.shapes]
         for o in list(objs):
-            if (isinstance(o, self.mod.Body) and o.body_type == self.mod.Body.DYNAMIC
-                    and (o.mass == 0 or o.moment == 0)):
-                # known, open: a massless body removed while its shapes stay
-                # makes NaN (test_bad_input.py::test_zero_density_on_a_removed_...)
+            if isinstance(o, self.mod.Body):
+                # A body removed while its shapes stay is legal (as in pymunk)
+                # but two open bugs live there, so its shapes go with it:
+                # with sleeping on, the next steps can hang
+                # (test_bad_input.py::test_sleeping_with_a_removed_body_...),
+                # and a massless one makes NaN (...::test_zero_density_on_a_...).
+                # (The fixed bugs of that situation have their own tests.)
                 objs += [s for s in o.shapes if s.space is self.space and s not in objs]
-        self.note(f"  remove {[type(o).__name__ for o in objs]}")
+        self.note(f"  remove {[self.label(o) for o in objs]}")
         self.attempt(self.space.remove, *objs)
 
     def set_body(self):
@@ -223,7 +242,7 @@ class Fuzzer:
                                                            else "vel")
         if attr == "center_of_gravity" and isinstance(value, tuple) and len(value) == 2:
             value = (value[0] * 0.05, value[1] * 0.05)
-        self.note(f"  body.{attr} = {value!r}")
+        self.note(f"  {self.label(b)}.{attr} = {value!r}")
         self.attempt(setattr, b, attr, value)
 
     def set_shape(self):
@@ -272,7 +291,29 @@ class Fuzzer:
                  "sleep_time_threshold": lambda: r.choice([math.inf, 0.5, 0.1]),
                  "idle_speed_threshold": lambda: r.choice([0.0, 1.0, 10.0])}[attr]()
         self.note(f"  space.{attr} = {value!r}")
-        self.attempt(setattr, self.space, attr, value)
+        if attr == "sleep_time_threshold":
+            self.set_threshold(value)
+        else:
+            self.attempt(setattr, self.space, attr, value)
+
+    def touches_awake(self, body):
+        others = []
+        try:
+            body.each_arbiter(lambda arb: others.extend(arb.bodies))
+        except self.clear:
+            return True
+        return any(o is not body and o.body_type != self.mod.Body.STATIC and not o.is_sleeping
+                   for o in others)
+
+    def set_threshold(self, value):
+        if value == math.inf:
+            # known, open: sleeping turned off while bodies sleep corrupts
+            # their arbiter lists (hang or abort later); wake them first
+            # (test_bad_input.py::test_turning_sleeping_off_while_bodies_sleep)
+            for b in self.space.bodies:
+                if b.is_sleeping:
+                    b.activate()
+        self.attempt(setattr, self.space, "sleep_time_threshold", value)
 
     def push(self):
         b = self.pick(self.bodies)
@@ -454,7 +495,7 @@ class Fuzzer:
         if b is None:
             return
         t = self.r.choice([self.mod.Body.DYNAMIC, self.mod.Body.KINEMATIC, self.mod.Body.STATIC, 7])
-        self.note(f"  body.body_type = {t}")
+        self.note(f"  {self.label(b)}.body_type = {t}")
         self.attempt(setattr, b, "body_type", t)
         if b.body_type == self.mod.Body.DYNAMIC and (b.mass == 0 or b.moment == 0):
             self.attempt(setattr, b, "mass", 1.0)
@@ -465,15 +506,25 @@ class Fuzzer:
         if b is None:
             return
         which = self.r.choice(["sleep", "activate", "sleep_with_group", "threshold"])
-        self.note(f"  {which}")
+        if which in ("sleep", "sleep_with_group") and self.touches_awake(b):
+            # known, open: forcing a body to sleep while it touches an awake
+            # body corrupts the heap later
+            # (test_bad_input.py::test_forced_sleep_of_a_body_touching_...)
+            which = "activate"
         if which == "sleep":
+            self.note(f"  {self.label(b)}.sleep()")
             self.attempt(b.sleep)
         elif which == "activate":
+            self.note(f"  {self.label(b)}.activate()")
             self.attempt(b.activate)
         elif which == "sleep_with_group":
-            self.attempt(b.sleep_with_group, self.pick(self.bodies))
+            other = self.pick(self.bodies)
+            self.note(f"  {self.label(b)}.sleep_with_group({self.label(other)})")
+            self.attempt(b.sleep_with_group, other)
         else:
-            self.space.sleep_time_threshold = self.r.choice([0.2, math.inf])
+            value = self.r.choice([0.2, math.inf])
+            self.note(f"  space.sleep_time_threshold = {value}")
+            self.set_threshold(value)
 
     def reindex(self):
         which = self.r.choice(["static", "shape", "body"])
