@@ -1343,3 +1343,32 @@ def test_a_massless_body_cannot_be_put_to_sleep():
     for _ in range(30):
         s.step(1 / 60)
     assert finite(*body_state(b)) and finite(*body_state(other))
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "space.pyx: a collision callback that wakes a sleeping body (sets its velocity, applies "
+    "an impulse, calls activate()) makes the next steps loop forever in "
+    "FloodFillComponent (pymunk 7.3 hangs the same way; found by the fuzzer). The body is "
+    "queued while the space is locked and woken when the collision phase unlocks it; "
+    "cpSpaceActivateBody then pushes arbiters that are already in space->arbiters, and a "
+    "body's arbiter list loops on itself. Reproducer: s = Space(); s.gravity = 0, -100; "
+    "s.sleep_time_threshold = 0.05; floor segment r 2 at y 0; four Body(1, 10) with "
+    "Circle(b, 4) at ((i % 2) * 6, 4 + 8 i); s.on_collision(None, None, begin=lambda arb, "
+    "sp, d: setattr(bodies[0], 'velocity', (1, 1))); step 15 x 1/60 -> hangs at the 14th. "
+    "Fix: when waking queued bodies at that unlock, skip arbiters already in "
+    "space->arbiters (or wake them after the step)."))
+@isolated(timeout=5)
+def test_waking_a_body_from_a_collision_callback():
+    s = Space()
+    s.gravity = 0, -100
+    s.sleep_time_threshold = 0.05
+    s.add(Segment(s.static_body, (-100, 0), (100, 0), 2))
+    bodies = []
+    for i in range(4):
+        b = Body(1, 10)
+        b.position = (i % 2) * 6, 4 + 8 * i
+        s.add(b, Circle(b, 4))
+        bodies.append(b)
+    s.on_collision(None, None, begin=lambda arb, sp, d: setattr(bodies[0], "velocity", (1, 1)))
+    for _ in range(15):
+        s.step(1 / 60)
