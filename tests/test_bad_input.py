@@ -628,7 +628,8 @@ def test_membership_sequences_follow_the_model(ops):
         sp_i = 1 if op == "other_space" else 0
         sp = spaces[sp_i]
         if op == "add_body" or (op == "other_space" and i % 2 == 0):
-            legal = where_b[i] is None
+            # refused too while the body's shape is in another space
+            legal = where_b[i] is None and where_s[i] in (None, sp_i)
             target = [bodies[i]]
         elif op in ("add_shape", "other_space"):
             legal = where_s[i] is None and where_b[i] == sp_i
@@ -637,7 +638,7 @@ def test_membership_sequences_follow_the_model(ops):
             # Space.add is not atomic (as in pymunk): bodies go in first, one
             # by one, and a refused shape leaves its body added
             target = [bodies[i], shapes[i]]
-            if where_b[i] is None:
+            if where_b[i] is None and where_s[i] in (None, 0):
                 where_b[i] = 0
                 legal = where_s[i] is None
                 target = [shapes[i]] if legal else target
