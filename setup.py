@@ -1,6 +1,6 @@
 """Build of the tamias2d extension modules.
 
-Every ``tamias2d/*.pyx`` is cythonized with one set of directives. The C flags
+Every ``src/tamias2d/*.pyx`` is cythonized with one set of directives. The C flags
 keep floating-point arithmetic exactly as Munk2D compiled by pymunk does it: no
 fused multiply-add (``-ffp-contract=off``), no ``-ffast-math``, no
 ``-march=native``.
@@ -46,7 +46,7 @@ else:
     compile_args += ["-ffp-contract=off", "-fno-strict-aliasing", "-fwrapv"]
 
 extensions = []
-for path in sorted(glob.glob(os.path.join("tamias2d", "*.pyx"))):
+for path in sorted(glob.glob(os.path.join("src", "tamias2d", "*.pyx"))):
     name = os.path.splitext(os.path.basename(path))[0]
     if ONLY and name not in ONLY:
         continue
@@ -61,7 +61,7 @@ setup(
     ext_modules=cythonize(
         extensions,
         compiler_directives=directives,
-        include_path=["."],
+        include_path=["src"],
         annotate=DEBUG,
         nthreads=0,
     ),

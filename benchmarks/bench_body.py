@@ -14,7 +14,7 @@ Every case is timed ``--repeat`` times (each a ``--number``-loop); the median
 per-loop time of each engine and the ratio tamias2d/pymunk are printed.
 Lower is better; a ratio of 0.5 means tamias2d takes half of pymunk's time.
 
-    PYTHONPATH=. python benchmarks/bench_body.py [--bodies N] [--repeat R] [--number K]
+    PYTHONPATH=src:. python benchmarks/bench_body.py [--bodies N] [--repeat R] [--number K]
 """
 import argparse
 import statistics

@@ -23,7 +23,7 @@ that contacts, cached arbiters and a grown broad phase exist.
    same ratio for two processes (each stepping its own space): the parallel
    capacity the machine gave at that time, which no thread can beat.
 
-    PYTHONPATH=. python benchmarks/bench_services.py [--bodies N] [--repeat R]
+    PYTHONPATH=src:. python benchmarks/bench_services.py [--bodies N] [--repeat R]
         [--steps K] [--warmup W] [--only copy|threads] [--json out.json]
 """
 import argparse

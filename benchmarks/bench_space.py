@@ -14,7 +14,7 @@ timed, alternating which engine goes first. The median time per step of
 each engine and the ratio tamias2d/pymunk are printed (lower is better;
 below 1.0 tamias2d is faster).
 
-    PYTHONPATH=. python benchmarks/bench_space.py [--repeat R] [--steps K] [--warmup W] [--only NAME]
+    PYTHONPATH=src:. python benchmarks/bench_space.py [--repeat R] [--steps K] [--warmup W] [--only NAME]
 """
 import argparse
 import os

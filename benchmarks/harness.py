@@ -25,7 +25,7 @@ def import_engines():
     try:
         import tamias2d
     except ImportError:
-        sys.path.insert(0, ROOT)
+        sys.path.insert(0, os.path.join(ROOT, "src"))
         for name in [m for m in sys.modules if m == "tamias2d" or m.startswith("tamias2d.")]:
             del sys.modules[name]
         import tamias2d

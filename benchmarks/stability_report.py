@@ -9,10 +9,10 @@ of added work until one passes; that setting is then run in pymunk too, and
 its time is compared with the default time (time per simulated step, both
 in tamias2d).
 
-    PYTHONPATH=. python benchmarks/stability_report.py            # full runs
-    PYTHONPATH=. python benchmarks/stability_report.py --ci       # CI lengths
-    PYTHONPATH=. python benchmarks/stability_report.py --only stack_10 tunnel
-    PYTHONPATH=. python benchmarks/stability_report.py --write docs/stability.md
+    PYTHONPATH=src:. python benchmarks/stability_report.py            # full runs
+    PYTHONPATH=src:. python benchmarks/stability_report.py --ci       # CI lengths
+    PYTHONPATH=src:. python benchmarks/stability_report.py --only stack_10 tunnel
+    PYTHONPATH=src:. python benchmarks/stability_report.py --write docs/stability.md
 
 With --write, the text between the markers ``<!-- results:begin -->`` and
 ``<!-- results:end -->`` of that file is replaced; without it the tables are
