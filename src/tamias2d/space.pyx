@@ -320,14 +320,6 @@ cdef struct arbiterFilterContext:
     cpBody *body
     cpShape *shape
 
-cdef inline void _callSeparateNoToggle(cpArbiter *arb, cpSpace *space) noexcept nogil:
-    # Shape removal calls separate on all five handlers without toggling
-    # `swapped` (unlike the step).
-    arb.handlerAB.separateFunc(arb, space, arb.handlerAB.userData)
-    arb.handlerBA.separateFunc(arb, space, arb.handlerBA.userData)
-    arb.handlerA.separateFunc(arb, space, arb.handlerA.userData)
-    arb.handlerB.separateFunc(arb, space, arb.handlerB.userData)
-    space.globalHandler.separateFunc(arb, space, space.globalHandler.userData)
 
 cdef cpBool cachedArbitersFilter(void *elt, void *data) noexcept nogil:
     cdef cpArbiter *arb = <cpArbiter *>elt
@@ -339,7 +331,7 @@ cdef cpBool cachedArbitersFilter(void *elt, void *data) noexcept nogil:
         if shape != NULL and arb.state != CP_ARBITER_STATE_CACHED:
             # One of the shapes is going away: the arbiter is invalidated.
             arb.state = CP_ARBITER_STATE_INVALIDATED
-            _callSeparateNoToggle(arb, context.space)
+            _callHandlers(arb, context.space, PHASE_SEPARATE, False)
         cpArbiterUnthread(arb)
         cpArrayDeleteObj(context.space.arbiters, arb)
         cpArrayPush(context.space.pooledArbiters, arb)
@@ -649,75 +641,43 @@ cdef inline cpBool QueryReject(cpShape *a, cpShape *b) noexcept nogil:
             or cpShapeFilterReject(a.filter, b.filter)
             or QueryRejectConstraint(a.body, b.body))
 
-# Five handlers in Munk2D's order, toggling `swapped` around BA and B so each
-# handler sees the shapes in its own type order.
-cdef inline void _callBegin(cpArbiter *arb, cpSpace *space) noexcept nogil:
-    cdef cpCollisionHandler *h
-    h = arb.handlerAB
-    h.beginFunc(arb, space, h.userData)
-    h = arb.handlerBA
-    arb.swapped = not arb.swapped
-    h.beginFunc(arb, space, h.userData)
-    arb.swapped = not arb.swapped
-    h = arb.handlerA
-    h.beginFunc(arb, space, h.userData)
-    h = arb.handlerB
-    arb.swapped = not arb.swapped
-    h.beginFunc(arb, space, h.userData)
-    arb.swapped = not arb.swapped
-    h = &space.globalHandler
-    h.beginFunc(arb, space, h.userData)
+# The four handler phases. The callback typedefs share one signature, so one
+# caller serves all of them.
+cdef enum HandlerPhase:
+    PHASE_BEGIN
+    PHASE_PRE_SOLVE
+    PHASE_POST_SOLVE
+    PHASE_SEPARATE
 
-cdef inline void _callPreSolve(cpArbiter *arb, cpSpace *space) noexcept nogil:
-    cdef cpCollisionHandler *h
-    h = arb.handlerAB
-    h.preSolveFunc(arb, space, h.userData)
-    h = arb.handlerBA
-    arb.swapped = not arb.swapped
-    h.preSolveFunc(arb, space, h.userData)
-    arb.swapped = not arb.swapped
-    h = arb.handlerA
-    h.preSolveFunc(arb, space, h.userData)
-    h = arb.handlerB
-    arb.swapped = not arb.swapped
-    h.preSolveFunc(arb, space, h.userData)
-    arb.swapped = not arb.swapped
-    h = &space.globalHandler
-    h.preSolveFunc(arb, space, h.userData)
+cdef inline void _callOne(cpCollisionHandler *h, HandlerPhase phase, cpArbiter *arb,
+                          cpSpace *space) noexcept nogil:
+    if phase == PHASE_BEGIN:
+        h.beginFunc(arb, space, h.userData)
+    elif phase == PHASE_PRE_SOLVE:
+        h.preSolveFunc(arb, space, h.userData)
+    elif phase == PHASE_POST_SOLVE:
+        h.postSolveFunc(arb, space, h.userData)
+    else:
+        h.separateFunc(arb, space, h.userData)
 
-cdef inline void _callPostSolve(cpArbiter *arb, cpSpace *space) noexcept nogil:
-    cdef cpCollisionHandler *h
-    h = arb.handlerAB
-    h.postSolveFunc(arb, space, h.userData)
-    h = arb.handlerBA
-    arb.swapped = not arb.swapped
-    h.postSolveFunc(arb, space, h.userData)
-    arb.swapped = not arb.swapped
-    h = arb.handlerA
-    h.postSolveFunc(arb, space, h.userData)
-    h = arb.handlerB
-    arb.swapped = not arb.swapped
-    h.postSolveFunc(arb, space, h.userData)
-    arb.swapped = not arb.swapped
-    h = &space.globalHandler
-    h.postSolveFunc(arb, space, h.userData)
-
-cdef inline void _callSeparate(cpArbiter *arb, cpSpace *space) noexcept nogil:
-    cdef cpCollisionHandler *h
-    h = arb.handlerAB
-    h.separateFunc(arb, space, h.userData)
-    h = arb.handlerBA
-    arb.swapped = not arb.swapped
-    h.separateFunc(arb, space, h.userData)
-    arb.swapped = not arb.swapped
-    h = arb.handlerA
-    h.separateFunc(arb, space, h.userData)
-    h = arb.handlerB
-    arb.swapped = not arb.swapped
-    h.separateFunc(arb, space, h.userData)
-    arb.swapped = not arb.swapped
-    h = &space.globalHandler
-    h.separateFunc(arb, space, h.userData)
+# Five handlers in Munk2D's order. In the step, `swapped` is toggled around BA
+# and B so each handler sees the shapes in its own type order; shape removal
+# calls separate without toggling.
+cdef inline void _callHandlers(cpArbiter *arb, cpSpace *space, HandlerPhase phase,
+                               bint toggle) noexcept nogil:
+    _callOne(arb.handlerAB, phase, arb, space)
+    if toggle:
+        arb.swapped = not arb.swapped
+    _callOne(arb.handlerBA, phase, arb, space)
+    if toggle:
+        arb.swapped = not arb.swapped
+    _callOne(arb.handlerA, phase, arb, space)
+    if toggle:
+        arb.swapped = not arb.swapped
+    _callOne(arb.handlerB, phase, arb, space)
+    if toggle:
+        arb.swapped = not arb.swapped
+    _callOne(&space.globalHandler, phase, arb, space)
 
 # The broad phase callback: narrow phase, arbiter lookup, handlers.
 cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID id,
@@ -754,8 +714,8 @@ cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID 
     cpArbiterUpdate(arb, &info, space)
 
     if arb.state == CP_ARBITER_STATE_FIRST_COLLISION:
-        _callBegin(arb, space)
-    _callPreSolve(arb, space)
+        _callHandlers(arb, space, PHASE_BEGIN, True)
+    _callHandlers(arb, space, PHASE_PRE_SOLVE, True)
 
     if (arb.state != CP_ARBITER_STATE_IGNORE
             and arb.processCollision
@@ -791,7 +751,7 @@ cdef cpBool cpSpaceArbiterSetFilter(void *elt, void *data) noexcept nogil:
     # Touched last step but not this one: the shapes separated.
     if ticks >= 1 and arb.state != CP_ARBITER_STATE_CACHED:
         arb.state = CP_ARBITER_STATE_CACHED
-        _callSeparate(arb, space)
+        _callHandlers(arb, space, PHASE_SEPARATE, True)
 
     if ticks >= space.collisionPersistence:
         arb.contacts = NULL
@@ -891,7 +851,7 @@ cdef void cpSpaceStep(cpSpace *space, cpFloat dt) noexcept nogil:
         if constraint.postSolve != NULL:
             constraint.postSolve(constraint, space)
     for i in range(arbiters.num):
-        _callPostSolve(<cpArbiter *>arbiters.arr[i], space)
+        _callHandlers(<cpArbiter *>arbiters.arr[i], space, PHASE_POST_SOLVE, True)
     cpSpaceUnlock(space, 1)
 
 
