@@ -1164,7 +1164,9 @@ cdef class Body:
         """Put the body to sleep now, even in mid-air (in a new group).
 
         The body must be dynamic and in a space with sleeping enabled
-        (a finite ``sleep_time_threshold``); not from inside a step.
+        (a finite ``sleep_time_threshold``); not from inside a step. If it
+        touches a body that stays awake, that contact wakes it again at
+        the next step.
 
         >>> import tamias2d
         >>> tamias2d.Body(1, 1).sleep()

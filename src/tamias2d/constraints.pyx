@@ -714,6 +714,32 @@ cdef void _detach_body_constraints(cpSpace *space, cpBody *body) noexcept nogil:
             tamias_constraint_detach(c)
         c = next
 
+cdef void tamias_constraint_clear_impulse(cpConstraint *c) noexcept nogil:
+    # Forget the accumulated impulse that warm-starts the next step: after a
+    # step that overflowed it can be inf or NaN and would poison the bodies
+    # again once they are reset.
+    cdef cpConstraintClass *k = c.klass
+    if k == &_pinJointClass:
+        (<cpPinJoint *>c).jnAcc = 0.0
+    elif k == &_slideJointClass:
+        (<cpSlideJoint *>c).jnAcc = 0.0
+    elif k == &_pivotJointClass:
+        (<cpPivotJoint *>c).jAcc = cpvzero()
+    elif k == &_grooveJointClass:
+        (<cpGrooveJoint *>c).jAcc = cpvzero()
+    elif k == &_dampedSpringClass:
+        (<cpDampedSpring *>c).jAcc = 0.0
+    elif k == &_dampedRotarySpringClass:
+        (<cpDampedRotarySpring *>c).jAcc = 0.0
+    elif k == &_rotaryLimitJointClass:
+        (<cpRotaryLimitJoint *>c).jAcc = 0.0
+    elif k == &_ratchetJointClass:
+        (<cpRatchetJoint *>c).jAcc = 0.0
+    elif k == &_gearJointClass:
+        (<cpGearJoint *>c).jAcc = 0.0
+    elif k == &_simpleMotorClass:
+        (<cpSimpleMotor *>c).jAcc = 0.0
+
 cdef void tamias_space_detach_constraints(cpSpace *space) noexcept nogil:
     cdef cpArray *arr = space.constraints
     cdef cpArray *components = space.sleepingComponents

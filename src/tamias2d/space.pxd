@@ -62,7 +62,7 @@ cdef void cpSpaceStep(cpSpace *space, cpFloat dt) noexcept nogil
 
 # -- components and sleeping (cpSpaceComponent.c, space side) --------------------------
 cdef void cpSpaceActivateBody(cpSpace *space, cpBody *body) noexcept nogil
-cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt) noexcept nogil
+cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int threadCount) noexcept nogil
 
 # -- Python ------------------------------------------------------------------------------
 cdef class Space:
@@ -84,6 +84,7 @@ cdef class Space:
 
     cdef int _raise_callback_error(self) except -1
     cdef int _check_c_errors(self) except -1
+    cdef int _raise_non_finite(self, cpBody *body, double dt) except -1
     cdef int _check_bodies(self) except -1
     cdef _add_body(self, Body body)
     cdef _add_shape(self, Shape shape)

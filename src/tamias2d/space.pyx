@@ -62,7 +62,8 @@ from tamias2d.arbiter cimport (Arbiter, arbiter_wrap, cpArbiterInit, cpArbiterUp
     cpArbiterThreadForBody, cpArbiterNext)
 from tamias2d.body cimport cpBodyRemoveConstraint
 from tamias2d.constraints cimport (Constraint, tamias_constraint_detach,
-    tamias_space_detach_constraints, tamias_check_constraints, tamias_constraint_debug_draw)
+    tamias_space_detach_constraints, tamias_check_constraints, tamias_constraint_debug_draw,
+    tamias_constraint_clear_impulse)
 
 from tamias2d.shape import PointQueryInfo, SegmentQueryInfo, ShapeQueryInfo
 from tamias2d.errors import (IllegalBody, IllegalShape, SpaceLocked, AlreadyInSpace,
@@ -708,7 +709,11 @@ cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID 
     arbHashID = CP_HASH_PAIR(<cpHashValue>info.a, <cpHashValue>info.b)
     arb = <cpArbiter *>cpHashSetInsert(space.cachedArbiters, arbHashID, shape_pair,
                                        cpSpaceArbiterSetTrans, space)
-    if arb == NULL:
+    if arb == NULL or arb.stamp == space.stamp:
+        # (Or the pair was handled already in this step: the spatial hash
+        # reports a pair again when a callback runs a query in the middle of
+        # its pass, as a query moves the hash's stamp on. Munk2D pushes the
+        # arbiter twice; threaded twice, it makes the flood fill loop.)
         cpSpacePopContacts(space, info.count)
         return info.id
     cpArbiterUpdate(arb, &info, space)
@@ -778,7 +783,7 @@ cdef void cpSpaceStep(cpSpace *space, cpFloat dt) noexcept nogil:
     cdef cpArray *bodies = space.dynamicBodies
     cdef cpArray *constraints = space.constraints
     cdef cpArray *arbiters = space.arbiters
-    cdef int i, j
+    cdef int i, j, collided
     cdef cpArbiter *arb
     cdef cpBody *body
     cdef cpConstraint *constraint
@@ -802,10 +807,16 @@ cdef void cpSpaceStep(cpSpace *space, cpFloat dt) noexcept nogil:
     cpSpacePushFreshContactBuffer(space)
     cpSpatialIndexEach(space.dynamicShapes, cpShapeUpdateFunc, NULL)
     cpSpatialIndexReindexQuery(space.dynamicShapes, cpSpaceCollideShapes, space)
+    # A callback of this phase may have woken sleeping bodies; the unlock
+    # activates them and appends their arbiters, which stayed threaded in
+    # the contact graph while they slept. Only the arbiters found above are
+    # threaded again (Munk2D threads both: a loop in a body's arbiter list,
+    # and the next flood fill never ends).
+    collided = arbiters.num
     cpSpaceUnlock(space, 0)
 
     # Rebuild the contact graph (and put idle components to sleep).
-    cpSpaceProcessComponents(space, dt)
+    cpSpaceProcessComponents(space, dt, collided)
 
     cpSpaceLock(space)
     # Drop old cached arbiters and call separate callbacks.
@@ -969,11 +980,12 @@ cdef inline void ComponentAdd(cpBody *root, cpBody *body) noexcept nogil:
 
 cdef void FloodFillComponent(cpBody *root, cpBody *body) noexcept nogil:
     # Kinematic bodies never sleep and keep what they touch awake; static
-    # bodies are asleep all the time. Recursive as in Munk2D.
+    # bodies are asleep all the time; orphans (see _orphanBody) are left out.
+    # Recursive as in Munk2D.
     cdef cpBody *other_root
     cdef cpArbiter *arb
     cdef cpConstraint *constraint
-    if cpBodyGetType(body) == CP_BODY_TYPE_DYNAMIC:
+    if cpBodyGetType(body) == CP_BODY_TYPE_DYNAMIC and not _orphanBody(body, root.space):
         other_root = ComponentRoot(body)
         if other_root == NULL:
             ComponentAdd(root, body)
@@ -994,7 +1006,16 @@ cdef inline cpBool ComponentActive(cpBody *root, cpFloat threshold) noexcept nog
         body = body.sleeping.next
     return 0
 
-cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt) noexcept nogil:
+cdef inline bint _orphanBody(cpBody *body, cpSpace *space) noexcept nogil:
+    # A dynamic body removed from the space while its shapes stayed (pymunk
+    # allows it). The space no longer integrates it, so, like a kinematic
+    # body, it never joins a component and keeps what it touches awake: a
+    # component put to sleep against it would keep their shared arbiter
+    # threaded, and the next step would thread it again.
+    return (body.space != space and body.shapeList != NULL
+            and cpBodyGetType(body) == CP_BODY_TYPE_DYNAMIC)
+
+cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int threadCount) noexcept nogil:
     cdef cpBool sleep = space.sleepTimeThreshold != INFINITY
     cdef cpArray *bodies = space.dynamicBodies
     cdef cpArray *arbiters
@@ -1020,18 +1041,21 @@ cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt) noexcept nogil:
             body.sleeping.idleTime = (0.0 if cpBodyKineticEnergy(body) > keThreshold
                                       else body.sleeping.idleTime + dt)
 
-    # Wake sleeping bodies that are touched, and thread every arbiter into
-    # its bodies' lists (head insertion, in arbiter array order).
+    # Wake sleeping bodies that are touched, and thread the arbiters found
+    # this step into their bodies' lists (head insertion, in array order).
+    # Arbiters appended from here on, by waking, are threaded already.
     arbiters = space.arbiters
-    count = arbiters.num
+    count = threadCount
     for i in range(count):
         arb = <cpArbiter *>arbiters.arr[i]
         a = arb.body_a
         b = arb.body_b
         if sleep:
-            if cpBodyGetType(b) == CP_BODY_TYPE_KINEMATIC or cpBodyIsSleeping(a):
+            if (cpBodyGetType(b) == CP_BODY_TYPE_KINEMATIC or cpBodyIsSleeping(a)
+                    or _orphanBody(b, space)):
                 cpBodyActivate(a)
-            if cpBodyGetType(a) == CP_BODY_TYPE_KINEMATIC or cpBodyIsSleeping(b):
+            if (cpBodyGetType(a) == CP_BODY_TYPE_KINEMATIC or cpBodyIsSleeping(b)
+                    or _orphanBody(a, space)):
                 cpBodyActivate(b)
         cpBodyPushArbiter(a, arb)
         cpBodyPushArbiter(b, arb)
@@ -1322,12 +1346,28 @@ cdef void _hookSleepWithGroup(cpBody *body, cpBody *group) noexcept nogil:
     cdef cpSpace *space = body.space
     cdef cpShape *shape
     cdef cpBody *root
+    cdef cpBody *other
+    cdef cpArbiter *arb
+    cdef cpArbiter *next_arb
     if cpBodyIsSleeping(body):
         return
     shape = body.shapeList
     while shape != NULL:
         cpShapeCacheBB(shape)
         shape = shape.next
+    # Forced to sleep while touching a body that stays awake: take those
+    # arbiters out of the contact graph. Munk2D leaves them threaded (and
+    # moves the contacts of those it owns to the heap); the next step finds
+    # the contact again, threads the arbiter a second time and frees a
+    # contact buffer pointer when it wakes the body. Unthreaded, the arbiter
+    # is an ordinary cached one: found again, it wakes this body.
+    arb = body.arbiterList
+    while arb != NULL:
+        next_arb = cpArbiterNext(arb, body)
+        other = arb.body_b if arb.body_a == body else arb.body_a
+        if cpBodyGetType(other) != CP_BODY_TYPE_STATIC and not cpBodyIsSleeping(other):
+            cpArbiterUnthread(arb)
+        arb = next_arb
     cpSpaceDeactivateBody(space, body)
     if group != NULL:
         root = ComponentRoot(group)
@@ -1794,12 +1834,17 @@ cdef class Space:
 
     @idle_speed_threshold.setter
     def idle_speed_threshold(self, value):
-        self._space.idleSpeedThreshold = value
+        cdef double v = value
+        if v != v:
+            raise ValueError("idle_speed_threshold must be a number, not NaN")
+        self._space.idleSpeedThreshold = v
 
     @property
     def sleep_time_threshold(self):
         """Idle time after which a group of bodies falls asleep; ``inf``
-        (the default) turns sleeping off.
+        (the default) turns sleeping off. Setting it to ``inf`` wakes every
+        sleeping body (pymunk leaves them asleep and its next steps can
+        hang); NaN is refused.
 
         >>> import tamias2d
         >>> tamias2d.Space().sleep_time_threshold
@@ -1809,7 +1854,20 @@ cdef class Space:
 
     @sleep_time_threshold.setter
     def sleep_time_threshold(self, value):
-        self._space.sleepTimeThreshold = value
+        cdef double v = value
+        cdef cpArray *components = self._space.sleepingComponents
+        if v != v:
+            raise ValueError("sleep_time_threshold must be a number (inf turns sleeping off), "
+                             "not NaN")
+        self._space.sleepTimeThreshold = v
+        if v == INFINITY:
+            # Sleeping off: wake everything that sleeps, as Box2D does. Munk2D
+            # leaves the bodies asleep, and with the flood fill off nothing
+            # ever wakes them: the step threads arbiters into their lists
+            # again and again (a loop in the contact graph, a hang or a heap
+            # corruption later). Each wake removes its component.
+            while components.num:
+                _hookWakeComponent(&self._space, <cpBody *>components.arr[components.num - 1])
 
     @property
     def collision_slop(self):
@@ -2131,10 +2189,31 @@ cdef class Space:
 
     # -- the step ----------------------------------------------------------------------------
 
+    cdef int _raise_non_finite(self, cpBody *body, double dt) except -1:
+        cdef cpArray *bodies = self._space.dynamicBodies
+        cdef cpBody *other
+        _forgetNonFiniteImpulses(&self._space)
+        b = <object>body.userData if body.userData != NULL else None
+        err = IllegalBody(
+            f"The step (dt={dt!r}) overflowed: {b!r} has position ({body.p.x}, {body.p.y}), "
+            f"velocity ({body.v.x}, {body.v.y}), angle {body.a}, angular velocity {body.w}. "
+            f"Some input is too large for double precision (the time step, a velocity, a "
+            f"force, a size). The space refuses to step until the bodies in this "
+            f"exception's .bodies are set to finite values or removed.")
+        err.bodies = []
+        for i in range(bodies.num):
+            other = <cpBody *>bodies.arr[i]
+            if _bodyNonFinite(other) and other.userData != NULL:
+                err.bodies.append(<object>other.userData)
+        raise err
+
     cdef int _check_bodies(self) except -1:
         cdef cpArray *bodies = self._space.dynamicBodies
         cdef cpBody *body
         cdef int i
+        body = _firstNonFiniteBody(bodies)
+        if body != NULL:
+            self._raise_non_finite(body, self._space.curr_dt)
         for i in range(bodies.num):
             body = <cpBody *>bodies.arr[i]
             if cpBodyGetType(body) != CP_BODY_TYPE_DYNAMIC:
@@ -2165,14 +2244,23 @@ cdef class Space:
         the step ends, then post-step callbacks run. An exception raised in
         a callback is re-raised here, after the step has finished.
 
+        ``dt`` must be finite and >= 0 (ValueError; 0 does nothing). If the
+        step overflows double precision (a huge ``dt``, speed or size), it
+        raises :class:`~tamias2d.errors.IllegalBody` naming the bodies it
+        made non-finite (in the exception's ``bodies``); the space refuses
+        to step until they are set to finite values or removed.
+
         >>> import tamias2d
         >>> s = tamias2d.Space()
         >>> for _ in range(10):
         ...     s.step(0.01)
         """
         cdef double cdt = dt
-        if not isfinite(cdt):
-            raise ValueError(f"dt must be a finite number, not {dt!r}")
+        cdef cpBody *bad
+        if not (isfinite(cdt) and cdt >= 0.0):
+            # pymunk takes a negative dt and integrates backwards, with the
+            # damping as pow(damping, dt): inf for a damping of 0.
+            raise ValueError(f"dt must be a finite number >= 0, not {dt!r}")
         if cpSpaceIsLocked(&self._space) or self._locked:
             raise SpaceLocked("step() cannot be called from inside a step or a query")
         self._check_bodies()
@@ -2182,10 +2270,13 @@ cdef class Space:
         try:
             with nogil:
                 cpSpaceStep(&self._space, cdt)
+                bad = _firstNonFiniteBody(self._space.dynamicBodies)
         finally:
             self._locked = False
         try:
             self._check_c_errors()
+            if bad != NULL:
+                self._raise_non_finite(bad, cdt)
         finally:
             self._after_step()
 
@@ -2624,8 +2715,122 @@ cdef class Space:
         """
         return _snapshot().space_deepcopy(self, {})
 
+    def _contact_graph_problem(self):
+        """A test aid: walk every body's arbiter list and sleeping component
+        and return a description of the first broken link (a loop, an
+        arbiter listed on a body it does not touch), or None. The step's
+        flood fill would hang on a loop; the fuzzer calls this after every
+        step to catch the operation that made one."""
+        cdef list found = []
+        cdef cpBody *body
+        cdef cpArbiter *arb
+        cdef cpArbiter *prev
+        cdef cpBody *member
+        cdef cpBody *other
+        cdef cpShape *shape
+        cdef int n
+        cdef list in_dynamic = [], in_static = []
+        cpSpatialIndexEach(self._space.dynamicShapes, _collectShapeAddress, <void *>in_dynamic)
+        cpSpatialIndexEach(self._space.staticShapes, _collectShapeAddress, <void *>in_static)
+        if set(in_dynamic) & set(in_static):
+            return "a shape is in both the dynamic and the static index"
+        if len(set(in_dynamic)) != len(in_dynamic) or len(set(in_static)) != len(in_static):
+            return "a shape is twice in an index"
+        for addr in in_dynamic + in_static:
+            shape = <cpShape *><uintptr_t>addr
+            if shape.body == NULL:
+                continue
+            # Awake dynamic and kinematic bodies' shapes are in the dynamic
+            # index; static and sleeping bodies' shapes in the static one.
+            if (addr in in_static) != (cpBodyGetType(shape.body) == CP_BODY_TYPE_STATIC
+                                       or cpBodyIsSleeping(shape.body)):
+                return (f"a shape of {<object>shape.userData!r} is in the "
+                        f"{'static' if addr in in_static else 'dynamic'} index")
+            found.append(<uintptr_t>shape.body)
+        for i in range(self._space.dynamicBodies.num):
+            found.append(<uintptr_t>self._space.dynamicBodies.arr[i])
+        current = {<uintptr_t>self._space.arbiters.arr[i]
+                   for i in range(self._space.arbiters.num)}
+        for addr in dict.fromkeys(found):
+            body = <cpBody *><uintptr_t>addr
+            name = repr(<object>body.userData) if body.userData != NULL else hex(addr)
+            arb = body.arbiterList
+            prev = NULL
+            n = 0
+            seen = set()
+            while arb != NULL:
+                if arb.body_a != body and arb.body_b != body:
+                    return f"{name}'s arbiter list holds an arbiter of other bodies"
+                if cpArbiterThreadForBody(arb, body).prev != prev:
+                    return f"{name}'s arbiter list has a wrong back link at entry {n}"
+                other = arb.body_b if arb.body_a == body else arb.body_a
+                if cpBodyIsSleeping(body):
+                    # A sleeping body touches only its component and static bodies.
+                    if (cpBodyGetType(other) != CP_BODY_TYPE_STATIC
+                            and other.sleeping.root != body.sleeping.root):
+                        return f"sleeping {name} is threaded to a body outside its component"
+                elif cpBodyGetType(body) != CP_BODY_TYPE_STATIC and <uintptr_t>arb not in current:
+                    # The next step unthreads only the arbiters of this step.
+                    return f"awake {name} is threaded to an arbiter of an older step"
+                n += 1
+                if <uintptr_t>arb in seen:
+                    return f"{name}'s arbiter list loops (entry {n} again)"
+                seen.add(<uintptr_t>arb)
+                prev = arb
+                arb = cpArbiterNext(arb, body)
+            if cpBodyIsSleeping(body):
+                member = body.sleeping.root
+                n = 0
+                while member != NULL:
+                    n += 1
+                    if n > len(found) + 1:  # more members than bodies
+                        return f"{name}'s sleeping component loops"
+                    member = member.sleeping.next
+        return None
+
     def __repr__(self):
         return f"Space(bodies={len(self._bodies)}, shapes={len(self._shapes)})"
+
+
+cdef cpBody *_firstNonFiniteBody(cpArray *bodies) noexcept nogil:
+    # The setters refuse non-finite values, so only an overflow in a step can
+    # make one; checked after every step (and before, while one is left).
+    cdef cpBody *body
+    cdef int i
+    for i in range(bodies.num):
+        body = <cpBody *>bodies.arr[i]
+        if _bodyNonFinite(body):
+            return body
+    return NULL
+
+
+cdef inline bint _bodyNonFinite(cpBody *body) noexcept nogil:
+    # x - x is 0 for a finite x and NaN for inf or NaN: one test for all.
+    return (body.p.x - body.p.x + body.p.y - body.p.y + body.v.x - body.v.x + body.v.y
+            - body.v.y + body.a - body.a + body.w - body.w) != 0.0
+
+cdef void _clearNonFiniteContactImpulses(void *elt, void *data) noexcept nogil:
+    cdef cpArbiter *arb = <cpArbiter *>elt
+    cdef cpContact *con
+    cdef int i
+    for i in range(arb.count if arb.contacts != NULL else 0):
+        con = &arb.contacts[i]
+        if (con.jnAcc - con.jnAcc + con.jtAcc - con.jtAcc + con.jBias - con.jBias) != 0.0:
+            con.jnAcc = con.jtAcc = con.jBias = 0.0
+
+cdef void _forgetNonFiniteImpulses(cpSpace *space) noexcept nogil:
+    # After a step that overflowed: the warm-start impulses of contacts and
+    # joints may be inf or NaN too, and would make the bodies non-finite again
+    # at the next step even after the user resets them.
+    cdef cpConstraint *c
+    cdef int i
+    cpHashSetEach(space.cachedArbiters, _clearNonFiniteContactImpulses, NULL)
+    for i in range(space.arbiters.num):
+        _clearNonFiniteContactImpulses(space.arbiters.arr[i], NULL)
+    for i in range(space.constraints.num):
+        c = <cpConstraint *>space.constraints.arr[i]
+        if _bodyNonFinite(c.a) or _bodyNonFinite(c.b):
+            tamias_constraint_clear_impulse(c)
 
 
 cdef void _findOrphanWithBadMass(void *obj, void *data) noexcept nogil:
@@ -2639,6 +2844,10 @@ cdef void _findOrphanWithBadMass(void *obj, void *data) noexcept nogil:
         return
     if not (body.m > 0.0 and body.m < INFINITY and body.i > 0.0):
         found[0] = body
+
+
+cdef void _collectShapeAddress(void *obj, void *data) noexcept with gil:
+    (<list>data).append(<uintptr_t>obj)
 
 
 cdef void _collectShape(void *obj, void *data) noexcept with gil:
