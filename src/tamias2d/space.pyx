@@ -2211,9 +2211,11 @@ cdef class Space:
         cdef cpArray *bodies = self._space.dynamicBodies
         cdef cpBody *body
         cdef int i
-        body = _firstNonFiniteBody(bodies)
-        if body != NULL:
-            self._raise_non_finite(body, self._space.curr_dt)
+        if self._overflowed:
+            body = _firstNonFiniteBody(bodies)
+            if body != NULL:
+                self._raise_non_finite(body, self._space.curr_dt)
+            self._overflowed = False
         for i in range(bodies.num):
             body = <cpBody *>bodies.arr[i]
             if cpBodyGetType(body) != CP_BODY_TYPE_DYNAMIC:
@@ -2276,6 +2278,7 @@ cdef class Space:
         try:
             self._check_c_errors()
             if bad != NULL:
+                self._overflowed = True
                 self._raise_non_finite(bad, cdt)
         finally:
             self._after_step()
