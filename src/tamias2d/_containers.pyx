@@ -351,27 +351,44 @@ cdef const void *cpHashSetFind(cpHashSet *set, cpHashValue hash, const void *ptr
     return bin.elt if bin != NULL else set.default_value
 
 
+# Each and Filter walk every bin, and a table never shrinks: a space whose
+# bodies have all fallen asleep walks tens of thousands of empty bins per step.
+# The empty bins are skipped in a tight pointer loop of their own; with one
+# loop around the callback, gcc keeps the bin index on the stack and each
+# empty bin costs a store-to-load round trip (1.2x pymunk's step time for a
+# sleeping wall of 10,000 boxes). The order of visits is unchanged.
 cdef void cpHashSetEach(cpHashSet *set, cpHashSetIteratorFunc func, void *data) noexcept nogil:
-    cdef unsigned int i
+    cdef cpHashSetBin **slot = set.table
+    cdef cpHashSetBin **end = set.table + set.size
     cdef cpHashSetBin *bin
     cdef cpHashSetBin *next_bin
-    for i in range(set.size):
-        bin = set.table[i]
+    while True:
+        while slot < end and slot[0] == NULL:
+            slot += 1
+        if slot == end:
+            return
+        bin = slot[0]
         while bin != NULL:
             # Read the link first: the callback may remove the current element.
             next_bin = bin.next
             func(bin.elt, data)
             bin = next_bin
+        slot += 1
 
 
 cdef void cpHashSetFilter(cpHashSet *set, cpHashSetFilterFunc func, void *data) noexcept nogil:
-    cdef unsigned int i
+    cdef cpHashSetBin **slot = set.table
+    cdef cpHashSetBin **end = set.table + set.size
     cdef cpHashSetBin **prev_ptr
     cdef cpHashSetBin *bin
     cdef cpHashSetBin *next_bin
-    for i in range(set.size):
-        prev_ptr = &set.table[i]
-        bin = set.table[i]
+    while True:
+        while slot < end and slot[0] == NULL:
+            slot += 1
+        if slot == end:
+            return
+        prev_ptr = slot
+        bin = slot[0]
         while bin != NULL:
             next_bin = bin.next
             if func(bin.elt, data):
@@ -381,6 +398,7 @@ cdef void cpHashSetFilter(cpHashSet *set, cpHashSetFilterFunc func, void *data) 
                 set.entries -= 1
                 _recycleBin(set, bin)
             bin = next_bin
+        slot += 1
 
 
 # -- test-only wrappers ------------------------------------------------------------

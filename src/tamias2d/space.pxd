@@ -77,6 +77,7 @@ cdef class Space:
     cdef dict _add_later         # objects added while locked, insertion order
     cdef dict _remove_later      # objects removed while locked (run LIFO, as pymunk)
     cdef bint _locked            # pymunk's Python-level lock (step or separate callback)
+    cdef bint _may_have_orphans  # a removed body's shapes may still be in the space
     cdef bint _overflowed        # the last step left a non-finite body (checked again before the next)
     cdef object _callback_error  # the first exception raised in a callback, or None
     cdef public object threaded

@@ -1644,6 +1644,7 @@ cdef class Space:
         self._add_later = {}
         self._remove_later = {}
         self._locked = False
+        self._may_have_orphans = True  # a copy may come with orphans
         self._callback_error = None
         self.threaded = False
 
@@ -2097,6 +2098,8 @@ cdef class Space:
         body._space = None
         if body._body.space == &self._space:
             cpSpaceRemoveBody(&self._space, &body._body)
+        if body._body.shapeList != NULL:
+            self._may_have_orphans = True  # its shapes stay in the space
         del self._bodies[body]
 
     # -- reindexing --------------------------------------------------------------------------
@@ -2226,11 +2229,18 @@ cdef class Space:
                     f"Dynamic bodies must have a mass > 0 and < inf and moment > 0. "
                     f"{b!r} has mass {body.m}, moment {body.i}.")
         # Bodies removed from the space whose shapes stayed still collide
-        # through those shapes (a density of 0 can reach them there).
-        body = NULL
-        cpSpatialIndexEach(self._space.dynamicShapes, _findOrphanWithBadMass, &body)
-        if body == NULL:
-            cpSpatialIndexEach(self._space.staticShapes, _findOrphanWithBadMass, &body)
+        # through those shapes (a density of 0 can reach them there). Finding
+        # them walks every shape, so only while there may be some: after such
+        # a removal, or once for a new (or copied) space.
+        if not self._may_have_orphans:
+            return 0
+        cdef OrphanScan scan
+        scan.bad = NULL
+        scan.orphans = 0
+        cpSpatialIndexEach(self._space.dynamicShapes, _scanOrphans, &scan)
+        cpSpatialIndexEach(self._space.staticShapes, _scanOrphans, &scan)
+        self._may_have_orphans = scan.orphans > 0
+        body = scan.bad
         if body != NULL:
             b = <object>body.userData if body.userData != NULL else None
             raise IllegalBody(
@@ -2836,17 +2846,19 @@ cdef void _forgetNonFiniteImpulses(cpSpace *space) noexcept nogil:
             tamias_constraint_clear_impulse(c)
 
 
-cdef void _findOrphanWithBadMass(void *obj, void *data) noexcept nogil:
-    # Keeps in *data the first dynamic body outside the space (removed, its
-    # shapes left in) whose mass or moment the solver cannot invert.
+cdef struct OrphanScan:
+    cpBody *bad      # the first orphan whose mass or moment cannot be inverted
+    int orphans      # shapes seen whose body is not in the space
+
+cdef void _scanOrphans(void *obj, void *data) noexcept nogil:
+    # Orphans: dynamic bodies outside the space (removed, their shapes left in).
     cdef cpBody *body = (<cpShape *>obj).body
-    cdef cpBody **found = <cpBody **>data
-    if found[0] != NULL or body == NULL or body.space != NULL:
+    cdef OrphanScan *scan = <OrphanScan *>data
+    if body == NULL or body.space != NULL or cpBodyGetType(body) != CP_BODY_TYPE_DYNAMIC:
         return
-    if cpBodyGetType(body) != CP_BODY_TYPE_DYNAMIC:
-        return
-    if not (body.m > 0.0 and body.m < INFINITY and body.i > 0.0):
-        found[0] = body
+    scan.orphans += 1
+    if scan.bad == NULL and not (body.m > 0.0 and body.m < INFINITY and body.i > 0.0):
+        scan.bad = body
 
 
 cdef void _collectShapeAddress(void *obj, void *data) noexcept with gil:
