@@ -1367,6 +1367,35 @@ def test_forced_sleep_of_a_body_touching_an_awake_one():
         assert finite(*body_state(b)) and 3 < b.position.y < 30
 
 
+@isolated(timeout=10)
+def test_a_static_body_under_sleeping_ones_turns_dynamic():
+    # Bug (fixed in body.pyx): a static body stays threaded to the sleeping
+    # bodies that rest on it. Munk2D's cpBodySetType has the call that would
+    # wake them commented out, so after the body turns dynamic an arbiter of
+    # an older step stays in both bodies' lists (the sleeping one's restored
+    # copy, if it owns it, is then solved beside the new one). The sleeping
+    # bodies on it are now woken first.
+    s = Space()
+    s.gravity = 0, -100
+    s.sleep_time_threshold = 0.3
+    plank = Body(body_type=Body.STATIC)
+    plank_shape = Poly.create_box(plank, (20, 4))
+    plank_shape.density = 1
+    s.add(plank, plank_shape)
+    box = Body(1, 10)
+    box.position = 0, 6
+    box_shape = Poly.create_box(box, (8, 8))
+    box_shape.friction = 1
+    s.add(box, box_shape)
+    _step_checked(s, 300)
+    assert box.is_sleeping
+    plank.body_type = Body.DYNAMIC
+    assert not box.is_sleeping
+    assert s._contact_graph_problem() is None
+    _step_checked(s, 60)
+    assert box.position.y < 6 and plank.position.y < 0  # both fall together
+
+
 @isolated(timeout=30)
 def test_a_massless_body_cannot_be_put_to_sleep():
     # Bug (fixed in body.pyx, found by tests/test_fuzz.py, seed 5025): the

@@ -888,6 +888,13 @@ cdef class Body:
             # next step loops forever in FloodFillComponent (pymunk hangs or
             # segfaults there). Waking is what cpBodySetType means to do.
             cpBodyActivate(&self._body)
+        if (t != <int>cpBodyGetType(&self._body) and self._body.space != NULL
+                and cpBodyGetType(&self._body) == CP_BODY_TYPE_STATIC):
+            # A static body stays threaded to the sleeping bodies resting on
+            # it; once it can move, that link would outlive the step (Munk2D
+            # has the call to cpBodyActivateStatic here commented out; a
+            # stale arbiter stays in their lists). Wake them first.
+            cpBodyActivateStatic(&self._body, NULL)
         cpBodySetType(&self._body, <cpBodyType>t)
 
     @property

@@ -1347,6 +1347,7 @@ cdef void _hookSleepWithGroup(cpBody *body, cpBody *group) noexcept nogil:
     cdef cpShape *shape
     cdef cpBody *root
     cdef cpBody *other
+    cdef cpBody *groupRoot
     cdef cpArbiter *arb
     cdef cpArbiter *next_arb
     if cpBodyIsSleeping(body):
@@ -1355,17 +1356,23 @@ cdef void _hookSleepWithGroup(cpBody *body, cpBody *group) noexcept nogil:
     while shape != NULL:
         cpShapeCacheBB(shape)
         shape = shape.next
-    # Forced to sleep while touching a body that stays awake: take those
-    # arbiters out of the contact graph. Munk2D leaves them threaded (and
-    # moves the contacts of those it owns to the heap); the next step finds
-    # the contact again, threads the arbiter a second time and frees a
+    # Forced to sleep while touching a body outside its new group: take
+    # those arbiters out of the contact graph. Munk2D leaves them threaded
+    # (and moves the contacts of those it owns to the heap); the next step
+    # finds the contact again, threads the arbiter a second time and frees a
     # contact buffer pointer when it wakes the body. Unthreaded, the arbiter
-    # is an ordinary cached one: found again, it wakes this body.
+    # is an ordinary cached one: found again, it wakes this body. A neighbour
+    # asleep in another group is woken first, so that its own copy of the
+    # arbiter goes back to the cache rather than staying on the heap.
+    groupRoot = ComponentRoot(group)
     arb = body.arbiterList
     while arb != NULL:
         next_arb = cpArbiterNext(arb, body)
         other = arb.body_b if arb.body_a == body else arb.body_a
-        if cpBodyGetType(other) != CP_BODY_TYPE_STATIC and not cpBodyIsSleeping(other):
+        if (cpBodyGetType(other) != CP_BODY_TYPE_STATIC
+                and (groupRoot == NULL or other.sleeping.root != groupRoot)):
+            if cpBodyIsSleeping(other):
+                cpBodyActivate(other)
             cpArbiterUnthread(arb)
         arb = next_arb
     cpSpaceDeactivateBody(space, body)
@@ -2749,16 +2756,17 @@ cdef class Space:
             return "a shape is in both the dynamic and the static index"
         if len(set(in_dynamic)) != len(in_dynamic) or len(set(in_static)) != len(in_static):
             return "a shape is twice in an index"
+        static_set = set(in_static)
         for addr in in_dynamic + in_static:
             shape = <cpShape *><uintptr_t>addr
             if shape.body == NULL:
                 continue
             # Awake dynamic and kinematic bodies' shapes are in the dynamic
             # index; static and sleeping bodies' shapes in the static one.
-            if (addr in in_static) != (cpBodyGetType(shape.body) == CP_BODY_TYPE_STATIC
-                                       or cpBodyIsSleeping(shape.body)):
+            if (addr in static_set) != (cpBodyGetType(shape.body) == CP_BODY_TYPE_STATIC
+                                        or cpBodyIsSleeping(shape.body)):
                 return (f"a shape of {<object>shape.userData!r} is in the "
-                        f"{'static' if addr in in_static else 'dynamic'} index")
+                        f"{'static' if addr in static_set else 'dynamic'} index")
             found.append(<uintptr_t>shape.body)
         for i in range(self._space.dynamicBodies.num):
             found.append(<uintptr_t>self._space.dynamicBodies.arr[i])
