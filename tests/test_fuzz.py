@@ -17,7 +17,9 @@ or a broken invariant fails the test with the seed, the command that
 replays it and the last operations of the log.
 
 CI runs 6 seeds x 6,000 operations (about 10 s); TAMIAS2D_FULL=1 runs 20
-seeds x 20,000. TAMIAS2D_SEED=S picks the first seed.
+seeds x 20,000. TAMIAS2D_SEED=S picks the first seed. The driver's
+--check-every-op checks the contact graph after every operation instead of
+after every step.
 """
 import argparse
 import math
@@ -594,13 +596,22 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=SEED0)
     ap.add_argument("--ops", type=int, default=2500)
     ap.add_argument("--log", help="operation log (default: stdout)")
+    ap.add_argument("--check-every-op", action="store_true",
+                    help="check the contact graph after every operation, not only after steps "
+                         "(slower; names the operation that broke it)")
     args = ap.parse_args(argv)
     sys.path.insert(0, ROOT)
     import tamias2d
     log = open(args.log, "w") if args.log else sys.stdout
     fz = Fuzzer(tamias2d, args.seed, log)
+
+    def check_graph(i, name):
+        problem = fz.space._contact_graph_problem()
+        if problem:
+            raise InvariantBroken(f"contact graph after operation {i} ({name}): {problem}")
+
     try:
-        fz.run(args.ops)
+        fz.run(args.ops, after_op=check_graph if args.check_every_op else None)
     except BaseException:
         log.write("UNEXPECTED:\n" + traceback.format_exc())
         log.flush()
