@@ -2242,6 +2242,7 @@ cdef class Space:
         if not self._may_have_orphans:
             return 0
         cdef OrphanScan scan
+        scan.space = &self._space
         scan.bad = NULL
         scan.orphans = 0
         cpSpatialIndexEach(self._space.dynamicShapes, _scanOrphans, &scan)
@@ -2855,14 +2856,14 @@ cdef void _forgetNonFiniteImpulses(cpSpace *space) noexcept nogil:
 
 
 cdef struct OrphanScan:
+    cpSpace *space
     cpBody *bad      # the first orphan whose mass or moment cannot be inverted
-    int orphans      # shapes seen whose body is not in the space
+    int orphans      # shapes seen whose body is an orphan (see _orphanBody)
 
 cdef void _scanOrphans(void *obj, void *data) noexcept nogil:
-    # Orphans: dynamic bodies outside the space (removed, their shapes left in).
     cdef cpBody *body = (<cpShape *>obj).body
     cdef OrphanScan *scan = <OrphanScan *>data
-    if body == NULL or body.space != NULL or cpBodyGetType(body) != CP_BODY_TYPE_DYNAMIC:
+    if body == NULL or not _orphanBody(body, scan.space):
         return
     scan.orphans += 1
     if scan.bad == NULL and not (body.m > 0.0 and body.m < INFINITY and body.i > 0.0):
