@@ -13,12 +13,8 @@ cdef cpCollisionHandler *cpCollisionHandlerDoNothing() noexcept nogil
 # The empty callback itself (the default of every handler slot).
 cdef void cpCollisionDoNothing(cpArbiter *arb, cpSpace *space, void *data) noexcept nogil
 
-# -- per-body threading of arbiters (CP_BODY_FOREACH_ARBITER) ---------------------
-cdef inline cpArbiterThread *cpArbiterThreadForBody(cpArbiter *arb, cpBody *body) noexcept nogil:
-    return &arb.thread_a if arb.body_a == body else &arb.thread_b
-
-cdef inline cpArbiter *cpArbiterNext(cpArbiter *node, cpBody *body) noexcept nogil:
-    return node.thread_a.next if node.body_a == body else node.thread_b.next
+# -- per-body threading of arbiters (CP_BODY_FOREACH_ARBITER), from _private.pxd -----
+from tamias2d._private cimport cpArbiterThreadForBody, cpArbiterNext
 
 cdef void cpArbiterUnthread(cpArbiter *arb) noexcept nogil
 

@@ -35,16 +35,8 @@ KINEMATIC = <int>CP_BODY_TYPE_KINEMATIC
 STATIC = <int>CP_BODY_TYPE_STATIC
 
 
-# -- private helpers of chipmunk_private.h ----------------------------------------
-cdef inline cpArbiter *_arbiter_next(cpArbiter *node, cpBody *body) noexcept nogil:
-    return node.thread_a.next if node.body_a == body else node.thread_b.next
-
-cdef inline cpConstraint *_constraint_next(cpConstraint *node, cpBody *body) noexcept nogil:
-    return node.next_a if node.a == body else node.next_b
-
-cdef inline void _apply_impulse(cpBody *body, cpVect j, cpVect r) noexcept nogil:
-    body.v = cpvadd(body.v, cpvmult(j, body.m_inv))
-    body.w += body.i_inv * cpvcross(r, j)
+# The helpers of chipmunk_private.h are in _private.pxd.
+from tamias2d._private cimport cpArbiterNext, cpConstraintNext, apply_impulse
 
 
 # -- space hooks ---------------------------------------------------------------------
@@ -192,7 +184,7 @@ cdef cpConstraint *_filter_constraints(cpConstraint *node, cpBody *body,
     if node == NULL:
         return NULL  # not in the list (the body was re-initialised): nothing to unlink
     if node == filter:
-        return _constraint_next(node, body)
+        return cpConstraintNext(node, body)
     elif node.a == body:
         node.next_a = _filter_constraints(node.next_a, body, filter)
     else:
@@ -287,7 +279,7 @@ cdef void cpBodyApplyForceAtLocalPoint(cpBody *body, cpVect force, cpVect point)
 cdef void cpBodyApplyImpulseAtWorldPoint(cpBody *body, cpVect impulse, cpVect point) noexcept nogil:
     cpBodyActivate(body)
     cdef cpVect r = cpvsub(point, cpTransformPoint(body.transform, body.cog))
-    _apply_impulse(body, impulse, r)
+    apply_impulse(body, impulse, r)
 
 
 cdef void cpBodyApplyImpulseAtLocalPoint(cpBody *body, cpVect impulse, cpVect point) noexcept nogil:
@@ -316,7 +308,7 @@ cdef void cpBodyActivate(cpBody *body) noexcept nogil:
         other = arb.body_b if arb.body_a == body else arb.body_a
         if cpBodyGetType(other) != CP_BODY_TYPE_STATIC:
             other.sleeping.idleTime = 0.0
-        arb = _arbiter_next(arb, body)
+        arb = cpArbiterNext(arb, body)
 
 
 cdef void cpBodyActivateStatic(cpBody *body, cpShape *filter) noexcept nogil:
@@ -327,7 +319,7 @@ cdef void cpBodyActivateStatic(cpBody *body, cpShape *filter) noexcept nogil:
     while arb != NULL:
         if filter == NULL or <const cpShape *>filter == arb.a or <const cpShape *>filter == arb.b:
             cpBodyActivate(arb.body_b if arb.body_a == body else arb.body_a)
-        arb = _arbiter_next(arb, body)
+        arb = cpArbiterNext(arb, body)
 
 
 cdef void cpBodySleep(cpBody *body) noexcept nogil:
@@ -1232,7 +1224,7 @@ cdef class Body:
             return
         factory = _get_arbiter_factory()
         while arb != NULL:
-            next_arb = _arbiter_next(arb, body)
+            next_arb = cpArbiterNext(arb, body)
             # Seen from this body while the callback runs, as Munk2D does.
             swapped = arb.swapped
             arb.swapped = body == arb.body_b

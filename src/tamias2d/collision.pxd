@@ -15,43 +15,11 @@ from tamias2d.vector cimport (cpVect, cpv, cpvadd, cpvsub, cpvneg, cpvmult,
     cpvdot, cpvcross, cpvperp)
 
 # -- contact impulse helpers (chipmunk_private.h) ------------------------------
-# Same expressions and association as Munk2D, so the solver gives the same bits.
-
-cdef inline cpVect relative_velocity(cpBody *a, cpBody *b, cpVect r1, cpVect r2) noexcept nogil:
-    cdef cpVect v1_sum = cpvadd(a.v, cpvmult(cpvperp(r1), a.w))
-    cdef cpVect v2_sum = cpvadd(b.v, cpvmult(cpvperp(r2), b.w))
-    return cpvsub(v2_sum, v1_sum)
-
-cdef inline cpFloat normal_relative_velocity(cpBody *a, cpBody *b, cpVect r1, cpVect r2,
-                                             cpVect n) noexcept nogil:
-    return cpvdot(relative_velocity(a, b, r1, r2), n)
-
-cdef inline void apply_impulse(cpBody *body, cpVect j, cpVect r) noexcept nogil:
-    body.v = cpvadd(body.v, cpvmult(j, body.m_inv))
-    body.w += body.i_inv * cpvcross(r, j)
-
-cdef inline void apply_impulses(cpBody *a, cpBody *b, cpVect r1, cpVect r2, cpVect j) noexcept nogil:
-    apply_impulse(a, cpvneg(j), r1)
-    apply_impulse(b, j, r2)
-
-cdef inline void apply_bias_impulse(cpBody *body, cpVect j, cpVect r) noexcept nogil:
-    body.v_bias = cpvadd(body.v_bias, cpvmult(j, body.m_inv))
-    body.w_bias += body.i_inv * cpvcross(r, j)
-
-cdef inline void apply_bias_impulses(cpBody *a, cpBody *b, cpVect r1, cpVect r2, cpVect j) noexcept nogil:
-    apply_bias_impulse(a, cpvneg(j), r1)
-    apply_bias_impulse(b, j, r2)
-
-cdef inline cpFloat k_scalar_body(cpBody *body, cpVect r, cpVect n) noexcept nogil:
-    cdef cpFloat rcn = cpvcross(r, n)
-    return body.m_inv + body.i_inv * rcn * rcn
-
-# Effective-mass denominator of a contact. A zero result (both bodies
-# infinitely heavy along n) is returned as is: pymunk builds Munk2D without
-# its soft asserts, so the solver then divides by zero. The Python wrapper
-# k_scalar() raises UnsolvableCollision instead.
-cdef inline cpFloat k_scalar(cpBody *a, cpBody *b, cpVect r1, cpVect r2, cpVect n) noexcept nogil:
-    return k_scalar_body(a, r1, n) + k_scalar_body(b, r2, n)
+# MIS section 10 names them in this module; the one copy is in _private.pxd
+# (beneath body, which applies impulses too). Re-exported here.
+from tamias2d._private cimport (relative_velocity, normal_relative_velocity,
+    apply_impulse, apply_impulses, apply_bias_impulse, apply_bias_impulses,
+    k_scalar_body, k_scalar)
 
 # -- narrow phase ----------------------------------------------------------------
 # The collision of two shapes with cached world data (cpShapeCacheBB).

@@ -701,14 +701,13 @@ cdef void tamias_constraint_detach(cpConstraint *constraint) noexcept nogil:
     constraint.next_a = NULL
     constraint.next_b = NULL
 
-cdef inline cpConstraint *_constraint_next(cpConstraint *node, cpBody *body) noexcept nogil:
-    return node.next_a if node.a == body else node.next_b
+from tamias2d._private cimport cpConstraintNext
 
 cdef void _detach_body_constraints(cpSpace *space, cpBody *body) noexcept nogil:
     cdef cpConstraint *c = body.constraintList
     cdef cpConstraint *next
     while c != NULL:
-        next = _constraint_next(c, body)
+        next = cpConstraintNext(c, body)
         if c.space == space:
             # Unlinking c may change the list but never frees `next`.
             tamias_constraint_detach(c)

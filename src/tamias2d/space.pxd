@@ -1,5 +1,6 @@
-# Space module (MIS section 8): the world of Munk2D (cpSpace.c, cpSpaceStep.c,
-# the space half of cpSpaceComponent.c, cpSpaceDebug.c) and the Python Space.
+# Space module (MIS section 8): the world of Munk2D (cpSpace.c, cpSpaceDebug.c)
+# and the Python Space. Its step (cpSpaceStep.c, the space half of
+# cpSpaceComponent.c) is _space_step; its queries (cpSpaceQuery.c) _space_query.
 # Arbiters and their solver are in arbiter.pxd; the struct is cpSpace in
 # _structs.pxd.
 from tamias2d._config cimport cpFloat, cpBool, cpCollisionType, cpCollisionID, cpTimestamp
@@ -42,27 +43,12 @@ cdef void cpSpaceEachBody(cpSpace *space, cpSpaceBodyIteratorFunc func, void *da
 # Dynamic tree, then static tree, each in leaf-set order.
 cdef void cpSpaceEachShape(cpSpace *space, cpSpatialIndexIteratorFunc func, void *data) noexcept nogil
 
-# -- locking and post-step callbacks (cpSpaceStep.c) ----------------------------------
-cdef void cpSpaceLock(cpSpace *space) noexcept nogil
-cdef void cpSpaceUnlock(cpSpace *space, cpBool runPostStep) noexcept nogil
-cdef cpPostStepCallback *cpSpaceGetPostStepCallback(cpSpace *space, void *key) noexcept nogil
-cdef cpBool cpSpaceAddPostStepCallback(cpSpace *space, cpPostStepFunc func, void *key,
-                                       void *data) noexcept nogil
-
-# -- contact buffers ------------------------------------------------------------------
-cdef void cpSpacePushFreshContactBuffer(cpSpace *space) noexcept nogil
-cdef cpContact *cpContactBufferGetArray(cpSpace *space) noexcept nogil
-cdef void cpSpacePushContacts(cpSpace *space, int count) noexcept nogil
-
-# -- the step ---------------------------------------------------------------------------
-cdef cpCollisionID cpSpaceCollideShapes(void *a, void *b, cpCollisionID id, void *space) noexcept nogil
-cdef cpBool cpSpaceArbiterSetFilter(void *arb, void *space) noexcept nogil
+# -- arbiter cache ----------------------------------------------------------------------
+# Unthreads and pools the cached arbiters of `body` (only those of shape
+# `filter` when it is not NULL, calling their separate callbacks).
 cdef void cpSpaceFilterArbiters(cpSpace *space, cpBody *body, cpShape *filter) noexcept nogil
-cdef void cpSpaceStep(cpSpace *space, cpFloat dt) noexcept nogil
 
-# -- components and sleeping (cpSpaceComponent.c, space side) --------------------------
-cdef void cpSpaceActivateBody(cpSpace *space, cpBody *body) noexcept nogil
-cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int threadCount) noexcept nogil
+# The step, the contact graph and sleeping: _space_step.pxd. Queries: _space_query.pxd.
 
 # -- Python ------------------------------------------------------------------------------
 cdef class Space:

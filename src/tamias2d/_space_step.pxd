@@ -1,0 +1,92 @@
+# The step of the chipmunk solver (Munk2D's cpSpaceStep.c) and the space side
+# of the contact graph and sleeping (cpSpaceComponent.c). The world itself,
+# cpSpace.c, is in space.pxd; the queries are in _space_query.pxd.
+#
+# cpSpaceStep is a pipeline of the stages below, in this order:
+#   StageResetArbiters       last step's arbiters: normal again, unthreaded
+#   StageIntegratePositions  body.position_func of every awake body
+#   StageCollide             broad phase -> cpSpaceCollideShapes (narrow phase,
+#                            arbiter cache, begin / pre-solve callbacks)
+#   cpSpaceProcessComponents contact graph, idle times, sleeping
+#   StageFilterArbiterCache  separate callbacks, expiry of cached arbiters
+#   StagePreStep             arbiters and constraints prepared for this dt
+#   StageIntegrateVelocities body.velocity_func (gravity, damping)
+#   StageWarmStart           last step's impulses applied again
+#   StageSolve               `iterations` sequential impulse passes
+#   StagePostSolve           post-solve callbacks
+#   cpSpaceUnlock(space, 1)  post-step callbacks, objects woken meanwhile
+from tamias2d._config cimport cpFloat, cpBool, cpCollisionID
+from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArray, cpContact,
+    cpPostStepCallback, cpPostStepFunc, CP_BODY_TYPE_DYNAMIC)
+from tamias2d.body cimport cpBodyGetType
+
+# -- locking and post-step callbacks ---------------------------------------------------
+cdef void cpSpaceLock(cpSpace *space) noexcept nogil
+# At the last unlock: activates the bodies woken while locked, then (if
+# runPostStep) runs and frees the post-step callbacks.
+cdef void cpSpaceUnlock(cpSpace *space, cpBool runPostStep) noexcept nogil
+cdef cpPostStepCallback *cpSpaceGetPostStepCallback(cpSpace *space, void *key) noexcept nogil
+cdef cpBool cpSpaceAddPostStepCallback(cpSpace *space, cpPostStepFunc func, void *key,
+                                       void *data) noexcept nogil
+
+# -- contact buffers --------------------------------------------------------------------
+cdef void cpSpacePushFreshContactBuffer(cpSpace *space) noexcept nogil
+# Room for CP_MAX_CONTACTS_PER_ARBITER contacts, or NULL when out of memory.
+cdef cpContact *cpContactBufferGetArray(cpSpace *space) noexcept nogil
+cdef void cpSpacePushContacts(cpSpace *space, int count) noexcept nogil
+
+# -- the step and its stages --------------------------------------------------------------
+cdef void cpSpaceStep(cpSpace *space, cpFloat dt) noexcept nogil
+cdef void StageResetArbiters(cpSpace *space) noexcept nogil
+cdef void StageIntegratePositions(cpSpace *space, cpFloat dt) noexcept nogil
+cdef void StageCollide(cpSpace *space) noexcept nogil
+cdef void StageFilterArbiterCache(cpSpace *space) noexcept nogil
+cdef void StagePreStep(cpSpace *space, cpFloat dt) noexcept nogil
+cdef void StageIntegrateVelocities(cpSpace *space, cpFloat dt) noexcept nogil
+cdef void StageWarmStart(cpSpace *space, cpFloat dt, cpFloat prev_dt) noexcept nogil
+cdef void StageSolve(cpSpace *space, cpFloat dt) noexcept nogil
+cdef void StagePostSolve(cpSpace *space) noexcept nogil
+
+# The broad phase callback of StageCollide, and the cache filter of
+# StageFilterArbiterCache.
+cdef cpCollisionID cpSpaceCollideShapes(void *a, void *b, cpCollisionID id, void *space) noexcept nogil
+cdef cpBool cpSpaceArbiterSetFilter(void *arb, void *space) noexcept nogil
+# cpShapeCacheBB as a spatial-index iterator.
+cdef void cpShapeUpdateFunc(void *shape, void *unused) noexcept nogil
+
+# -- components and sleeping ----------------------------------------------------------------
+cdef void cpSpaceActivateBody(cpSpace *space, cpBody *body) noexcept nogil
+cdef void cpSpaceDeactivateBody(cpSpace *space, cpBody *body) noexcept nogil
+# Wakes every body of the sleeping component rooted at `root` and drops the
+# component (cpBodyActivate's space half).
+cdef void cpSpaceWakeComponent(cpSpace *space, cpBody *root) noexcept nogil
+# Threads this step's first `threadCount` arbiters into the contact graph,
+# updates idle times and puts idle components to sleep.
+cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int threadCount) noexcept nogil
+
+# A dynamic body removed from the space while its shapes stayed (pymunk
+# allows it). The space no longer integrates it, so, like a kinematic body, it
+# never joins a component and keeps what it touches awake: a component put to
+# sleep against it would keep their shared arbiter threaded, and the next
+# step would thread it again.
+cdef inline bint _orphanBody(cpBody *body, cpSpace *space) noexcept nogil:
+    return (body.space != space and body.shapeList != NULL
+            and cpBodyGetType(body) == CP_BODY_TYPE_DYNAMIC)
+
+# -- guards of the step (not in Munk2D: pymunk goes NaN where these raise) --------------------
+# x - x is 0 for a finite x and NaN for inf or NaN: one test for all.
+cdef inline bint _bodyNonFinite(cpBody *body) noexcept nogil:
+    return (body.p.x - body.p.x + body.p.y - body.p.y + body.v.x - body.v.x + body.v.y
+            - body.v.y + body.a - body.a + body.w - body.w) != 0.0
+
+cdef cpBody *_firstNonFiniteBody(cpArray *bodies) noexcept nogil
+# After a step that overflowed, drop the non-finite warm-start impulses.
+cdef void _forgetNonFiniteImpulses(cpSpace *space) noexcept nogil
+
+cdef struct OrphanScan:
+    cpSpace *space
+    cpBody *bad      # the first orphan whose mass or moment cannot be inverted
+    int orphans      # shapes seen whose body is an orphan (see _orphanBody)
+
+# A spatial-index iterator filling an OrphanScan.
+cdef void _scanOrphans(void *obj, void *data) noexcept nogil

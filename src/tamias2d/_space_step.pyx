@@ -1,0 +1,802 @@
+"""The chipmunk solver's step: Munk2D's cpSpaceStep.c and the space side of
+cpSpaceComponent.c (contact graph, sleeping).
+
+``cpSpaceStep`` reads as the pipeline of named stages listed in
+``_space_step.pxd``. Everything here is C (``noexcept nogil``); the only
+way into Python is through the callbacks the Python layer installs (collision
+handlers, Python integrators, post-step callbacks), which take the GIL
+themselves. The world (cpSpace.c) and the ``Space`` class are in
+``space.pyx``; the queries in ``_space_query.pyx``; the contact solver of one
+arbiter in ``arbiter.pyx`` and the joints' in ``constraints.pyx``.
+"""
+from libc.math cimport INFINITY, pow
+from libc.string cimport memcpy
+
+from tamias2d._config cimport (cpFloat, cpBool, cpHashValue, cpCollisionID, cpTimestamp,
+    CP_HASH_PAIR, CP_MAX_CONTACTS_PER_ARBITER, CP_BUFFER_BYTES)
+from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, cpArray,
+    cpCollisionInfo, cpContactBufferHeader, cpPostStepCallback, cpPostStepFunc,
+    cpConstraint, cpBodyType, cpSpatialIndex,
+    CP_BODY_TYPE_DYNAMIC, CP_BODY_TYPE_KINEMATIC, CP_BODY_TYPE_STATIC,
+    CP_ARBITER_STATE_FIRST_COLLISION, CP_ARBITER_STATE_NORMAL,
+    CP_ARBITER_STATE_IGNORE, CP_ARBITER_STATE_CACHED)
+from tamias2d._containers cimport (cpcalloc, cpfree, cpArrayPush, cpArrayPop,
+    cpArrayDeleteObj, cpArrayContains, cpHashSetInsert, cpHashSetEach, cpHashSetFilter)
+from tamias2d._bbtree cimport (cpSpatialIndexEach, cpSpatialIndexInsert, cpSpatialIndexRemove,
+    cpSpatialIndexReindexQuery)
+from tamias2d.vector cimport cpVect, cpvlengthsq, cpBBIntersects
+from tamias2d.body cimport (cpBodyActivate, cpBodyGetType, cpBodyIsSleeping,
+    cpBodyKineticEnergy, tamias_BodySpaceHooks, tamias_set_body_space_hooks)
+from tamias2d.shape cimport cpShapeCacheBB, cpShapeFilterReject
+from tamias2d.collision cimport cpCollide
+from tamias2d.arbiter cimport (cpArbiterInit, cpArbiterUpdate, cpArbiterPreStep,
+    cpArbiterApplyCachedImpulse, cpArbiterApplyImpulse, cpArbiterUnthread)
+from tamias2d.constraints cimport tamias_constraint_clear_impulse
+from tamias2d._private cimport (cpArbiterThreadForBody, cpArbiterNext, cpConstraintNext,
+    cpSpaceArrayForBodyType, cpSpaceUncacheArbiter, cpCallHandlers,
+    PHASE_BEGIN, PHASE_PRE_SOLVE, PHASE_POST_SOLVE, PHASE_SEPARATE)
+
+
+# Contacts per 32 KiB contact buffer, as Munk2D computes CP_CONTACTS_BUFFER_SIZE.
+cdef enum:
+    CP_CONTACTS_BUFFER_SIZE = (CP_BUFFER_BYTES - 24) // 96
+
+cdef struct cpContactBuffer:
+    cpContactBufferHeader header
+    cpContact contacts[CP_CONTACTS_BUFFER_SIZE]
+
+if sizeof(cpContactBufferHeader) != 24 or sizeof(cpContact) != 96:  # pragma: no cover
+    raise ImportError("tamias2d._space_step: unexpected contact struct sizes")
+
+
+cdef void cpShapeUpdateFunc(void *shape, void *unused) noexcept nogil:
+    cpShapeCacheBB(<cpShape *>shape)
+
+
+# -- post-step callbacks and locking (cpSpaceStep.c) ------------------------------------------
+
+cdef cpPostStepCallback *cpSpaceGetPostStepCallback(cpSpace *space, void *key) noexcept nogil:
+    cdef cpArray *arr = space.postStepCallbacks
+    cdef int i
+    cdef cpPostStepCallback *callback
+    for i in range(arr.num):
+        callback = <cpPostStepCallback *>arr.arr[i]
+        if callback != NULL and callback.key == key:
+            return callback
+    return NULL
+
+cdef void PostStepDoNothing(cpSpace *space, void *obj, void *data) noexcept nogil:
+    pass
+
+cdef cpBool cpSpaceAddPostStepCallback(cpSpace *space, cpPostStepFunc func, void *key,
+                                       void *data) noexcept nogil:
+    cdef cpPostStepCallback *callback
+    if cpSpaceGetPostStepCallback(space, key) == NULL:
+        callback = <cpPostStepCallback *>cpcalloc(1, sizeof(cpPostStepCallback))
+        if callback == NULL:
+            return 0
+        callback.func = func if func != NULL else PostStepDoNothing
+        callback.key = key
+        callback.data = data
+        if not cpArrayPush(space.postStepCallbacks, callback):
+            cpfree(callback)
+            return 0
+        return 1
+    return 0
+
+cdef void cpSpaceLock(cpSpace *space) noexcept nogil:
+    space.locked += 1
+
+cdef void cpSpaceUnlock(cpSpace *space, cpBool runPostStep) noexcept nogil:
+    cdef cpArray *waking
+    cdef cpArray *arr
+    cdef int i, count
+    cdef cpPostStepCallback *callback
+    cdef cpPostStepFunc func
+    space.locked -= 1
+    if space.locked == 0:
+        waking = space.rousedBodies
+        count = waking.num
+        for i in range(count):
+            cpSpaceActivateBody(space, <cpBody *>waking.arr[i])
+            waking.arr[i] = NULL
+        waking.num = 0
+
+        if space.locked == 0 and runPostStep and not space.skipPostStep:
+            space.skipPostStep = 1
+            arr = space.postStepCallbacks
+            i = 0
+            while i < arr.num:
+                callback = <cpPostStepCallback *>arr.arr[i]
+                func = callback.func
+                # Cleared first in case the callback runs the callbacks again.
+                callback.func = NULL
+                if func != NULL:
+                    func(space, callback.key, callback.data)
+                arr.arr[i] = NULL
+                cpfree(callback)
+                i += 1
+            arr.num = 0
+            space.skipPostStep = 0
+
+
+# -- contact buffers -------------------------------------------------------------------------
+
+cdef cpContactBufferHeader *cpSpaceAllocContactBuffer(cpSpace *space) noexcept nogil:
+    cdef cpContactBuffer *buffer = <cpContactBuffer *>cpcalloc(1, sizeof(cpContactBuffer))
+    if buffer == NULL:
+        return NULL
+    if not cpArrayPush(space.allocatedBuffers, buffer):
+        cpfree(buffer)
+        return NULL
+    return <cpContactBufferHeader *>buffer
+
+cdef cpContactBufferHeader *cpContactBufferHeaderInit(cpContactBufferHeader *header,
+        cpTimestamp stamp, cpContactBufferHeader *splice) noexcept nogil:
+    header.stamp = stamp
+    header.next = splice.next if splice != NULL else header
+    header.numContacts = 0
+    return header
+
+cdef void cpSpacePushFreshContactBuffer(cpSpace *space) noexcept nogil:
+    cdef cpTimestamp stamp = space.stamp
+    cdef cpContactBufferHeader *head = space.contactBuffersHead
+    cdef cpContactBufferHeader *tail
+    cdef cpContactBufferHeader *buffer
+    if head == NULL:
+        buffer = cpSpaceAllocContactBuffer(space)
+        if buffer != NULL:
+            space.contactBuffersHead = cpContactBufferHeaderInit(buffer, stamp, NULL)
+    elif <cpTimestamp>(stamp - head.next.stamp) > space.collisionPersistence:
+        # The oldest buffer of the ring has expired: reuse it.
+        tail = head.next
+        space.contactBuffersHead = cpContactBufferHeaderInit(tail, stamp, tail)
+    else:
+        buffer = cpSpaceAllocContactBuffer(space)
+        if buffer != NULL:
+            buffer = cpContactBufferHeaderInit(buffer, stamp, head)
+            head.next = buffer
+            space.contactBuffersHead = buffer
+        # Out of memory: keep filling the current head (the caller checks room).
+
+cdef cpContact *cpContactBufferGetArray(cpSpace *space) noexcept nogil:
+    cdef cpContactBufferHeader *head
+    if (space.contactBuffersHead == NULL or space.contactBuffersHead.numContacts
+            + CP_MAX_CONTACTS_PER_ARBITER > CP_CONTACTS_BUFFER_SIZE):
+        # The next collision could overflow this buffer: start a fresh one.
+        cpSpacePushFreshContactBuffer(space)
+    head = space.contactBuffersHead
+    if head == NULL or head.numContacts + CP_MAX_CONTACTS_PER_ARBITER > CP_CONTACTS_BUFFER_SIZE:
+        return NULL  # out of memory
+    return (<cpContactBuffer *>head).contacts + head.numContacts
+
+cdef void cpSpacePushContacts(cpSpace *space, int count) noexcept nogil:
+    space.contactBuffersHead.numContacts += count
+
+cdef inline void cpSpacePopContacts(cpSpace *space, int count) noexcept nogil:
+    space.contactBuffersHead.numContacts -= count
+
+
+# -- collision detection ------------------------------------------------------------------------
+
+cdef void *cpSpaceArbiterSetTrans(const void *ptr, void *data) noexcept nogil:
+    cdef cpShape **shapes = <cpShape **>ptr
+    cdef cpSpace *space = <cpSpace *>data
+    cdef int count, i
+    cdef cpArbiter *buffer
+    if space.pooledArbiters.num == 0:
+        # The pool is empty: carve a fresh 32 KiB block into arbiters.
+        count = CP_BUFFER_BYTES // sizeof(cpArbiter)
+        buffer = <cpArbiter *>cpcalloc(1, CP_BUFFER_BYTES)
+        if buffer == NULL:
+            return NULL
+        if not cpArrayPush(space.allocatedBuffers, buffer):
+            cpfree(buffer)
+            return NULL
+        for i in range(count):
+            cpArrayPush(space.pooledArbiters, buffer + i)
+        if space.pooledArbiters.num == 0:
+            return NULL
+    return cpArbiterInit(<cpArbiter *>cpArrayPop(space.pooledArbiters), shapes[0], shapes[1])
+
+cdef inline cpBool QueryRejectConstraint(cpBody *a, cpBody *b) noexcept nogil:
+    cdef cpConstraint *constraint = a.constraintList
+    while constraint != NULL:
+        if (not constraint.collideBodies and (
+                (constraint.a == a and constraint.b == b)
+                or (constraint.a == b and constraint.b == a))):
+            return 1
+        constraint = cpConstraintNext(constraint, a)
+    return 0
+
+cdef inline cpBool QueryReject(cpShape *a, cpShape *b) noexcept nogil:
+    return (not cpBBIntersects(a.bb, b.bb)
+            or a.body == b.body
+            or cpShapeFilterReject(a.filter, b.filter)
+            or QueryRejectConstraint(a.body, b.body))
+
+# The broad phase callback: narrow phase, arbiter lookup, handlers.
+cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID id,
+                                        void *data) noexcept nogil:
+    cdef cpShape *a = <cpShape *>obj_a
+    cdef cpShape *b = <cpShape *>obj_b
+    cdef cpSpace *space = <cpSpace *>data
+    cdef cpContact *contacts
+    cdef cpCollisionInfo info
+    cdef const cpShape *shape_pair[2]
+    cdef cpHashValue arbHashID
+    cdef cpArbiter *arb
+
+    if QueryReject(a, b):
+        return id
+
+    contacts = cpContactBufferGetArray(space)
+    if contacts == NULL:
+        return id  # out of memory: the flag is up, the pair is skipped
+    info = cpCollide(a, b, id, contacts)
+    if info.count == 0:
+        return info.id
+    cpSpacePushContacts(space, info.count)
+
+    # The persistent arbiter of the pair, keyed by the two shape pointers.
+    shape_pair[0] = info.a
+    shape_pair[1] = info.b
+    arbHashID = CP_HASH_PAIR(<cpHashValue>info.a, <cpHashValue>info.b)
+    arb = <cpArbiter *>cpHashSetInsert(space.cachedArbiters, arbHashID, shape_pair,
+                                       cpSpaceArbiterSetTrans, space)
+    if arb == NULL or arb.stamp == space.stamp:
+        # (Or the pair was handled already in this step: the spatial hash
+        # reports a pair again when a callback runs a query in the middle of
+        # its pass, as a query moves the hash's stamp on. Munk2D pushes the
+        # arbiter twice; threaded twice, it makes the flood fill loop.)
+        cpSpacePopContacts(space, info.count)
+        return info.id
+    cpArbiterUpdate(arb, &info, space)
+
+    if arb.state == CP_ARBITER_STATE_FIRST_COLLISION:
+        cpCallHandlers(arb, space, PHASE_BEGIN, True)
+    cpCallHandlers(arb, space, PHASE_PRE_SOLVE, True)
+
+    if (arb.state != CP_ARBITER_STATE_IGNORE
+            and arb.processCollision
+            and not (a.sensor or b.sensor)
+            and not (a.body.m == INFINITY and b.body.m == INFINITY)):
+        if not cpArrayPush(space.arbiters, arb):
+            pass  # out of memory: the flag is up, the pair goes unsolved
+    else:
+        cpSpacePopContacts(space, info.count)
+        arb.contacts = NULL
+        arb.count = 0
+        # Rejected, sensor and infinite-mass arbiters skip post-solve; mark
+        # them used here instead.
+        if arb.state != CP_ARBITER_STATE_IGNORE:
+            arb.state = CP_ARBITER_STATE_NORMAL
+
+    arb.stamp = space.stamp
+    return info.id
+
+# Per-step filter of the arbiter cache: separate callbacks and expiry.
+cdef cpBool cpSpaceArbiterSetFilter(void *elt, void *data) noexcept nogil:
+    cdef cpArbiter *arb = <cpArbiter *>elt
+    cdef cpSpace *space = <cpSpace *>data
+    cdef cpTimestamp ticks = space.stamp - arb.stamp
+    cdef cpBody *a = arb.body_a
+    cdef cpBody *b = arb.body_b
+
+    # Keep arbiters between static or sleeping bodies untouched.
+    if ((cpBodyGetType(a) == CP_BODY_TYPE_STATIC or cpBodyIsSleeping(a))
+            and (cpBodyGetType(b) == CP_BODY_TYPE_STATIC or cpBodyIsSleeping(b))):
+        return 1
+
+    # Touched last step but not this one: the shapes separated.
+    if ticks >= 1 and arb.state != CP_ARBITER_STATE_CACHED:
+        arb.state = CP_ARBITER_STATE_CACHED
+        cpCallHandlers(arb, space, PHASE_SEPARATE, True)
+
+    if ticks >= space.collisionPersistence:
+        arb.contacts = NULL
+        arb.count = 0
+        cpArrayPush(space.pooledArbiters, arb)
+        if ticks >= 1:
+            # Not in this step's arbiter array: forget the shapes (see
+            # cachedArbitersFilter).
+            arb.a = NULL
+            arb.b = NULL
+        return 0
+    return 1
+
+
+# -- the step: a pipeline of named stages (cpSpaceStep) -----------------------------------------
+# cpSpaceStep is the chipmunk solver's pipeline. Each stage is a function of
+# its own, declared in _space_step.pxd, so that another solver can be another
+# list of stages that reuses the ones it shares (collision, components, the
+# arbiter cache, callbacks) instead of a fork of this file. The stages keep
+# Munk2D's order and arithmetic exactly: that order is what makes the
+# Gauss-Seidel solver give pymunk's bits.
+
+cdef void cpSpaceStep(cpSpace *space, cpFloat dt) noexcept nogil:
+    if dt == 0.0:
+        return
+    space.stamp += 1
+    cdef cpFloat prev_dt = space.curr_dt
+    space.curr_dt = dt
+    cdef int collided
+
+    StageResetArbiters(space)
+    cpSpaceLock(space)
+    StageIntegratePositions(space, dt)
+    StageCollide(space)
+    # A callback of the collide stage may have woken sleeping bodies; the
+    # unlock activates them and appends their arbiters, which stayed
+    # threaded in the contact graph while they slept. Only the arbiters
+    # found by the collide stage are threaded again (Munk2D threads both: a
+    # loop in a body's arbiter list, and the next flood fill never ends).
+    collided = space.arbiters.num
+    cpSpaceUnlock(space, 0)
+
+    cpSpaceProcessComponents(space, dt, collided)
+
+    cpSpaceLock(space)
+    StageFilterArbiterCache(space)
+    StagePreStep(space, dt)
+    StageIntegrateVelocities(space, dt)
+    StageWarmStart(space, dt, prev_dt)
+    StageSolve(space, dt)
+    StagePostSolve(space)
+    # Unlocking runs the post-step callbacks.
+    cpSpaceUnlock(space, 1)
+
+# Last step's arbiters go back to normal; those between awake bodies are
+# taken out of the contact graph (the components stage threads them again).
+cdef void StageResetArbiters(cpSpace *space) noexcept nogil:
+    cdef cpArray *arbiters = space.arbiters
+    cdef cpArbiter *arb
+    cdef int i
+    for i in range(arbiters.num):
+        arb = <cpArbiter *>arbiters.arr[i]
+        arb.state = CP_ARBITER_STATE_NORMAL
+        if not cpBodyIsSleeping(arb.body_a) and not cpBodyIsSleeping(arb.body_b):
+            cpArbiterUnthread(arb)
+    arbiters.num = 0
+
+cdef void StageIntegratePositions(cpSpace *space, cpFloat dt) noexcept nogil:
+    cdef cpArray *bodies = space.dynamicBodies
+    cdef cpBody *body
+    cdef int i
+    for i in range(bodies.num):
+        body = <cpBody *>bodies.arr[i]
+        body.position_func(body, dt)
+
+# Broad and narrow phase in one pass: refresh the dynamic shapes' boxes, then
+# the dynamic index reports every candidate pair to cpSpaceCollideShapes
+# (narrow phase, arbiter lookup, begin and pre-solve callbacks).
+cdef void StageCollide(cpSpace *space) noexcept nogil:
+    cpSpacePushFreshContactBuffer(space)
+    cpSpatialIndexEach(space.dynamicShapes, cpShapeUpdateFunc, NULL)
+    cpSpatialIndexReindexQuery(space.dynamicShapes, cpSpaceCollideShapes, space)
+
+# Separate callbacks for pairs no longer touching; expired arbiters return
+# to the pool.
+cdef void StageFilterArbiterCache(cpSpace *space) noexcept nogil:
+    cpHashSetFilter(space.cachedArbiters, cpSpaceArbiterSetFilter, space)
+
+cdef void StagePreStep(cpSpace *space, cpFloat dt) noexcept nogil:
+    cdef cpArray *arbiters = space.arbiters
+    cdef cpArray *constraints = space.constraints
+    cdef cpConstraint *constraint
+    cdef cpFloat slop = space.collisionSlop
+    cdef cpFloat biasCoef = 1.0 - pow(space.collisionBias, dt)
+    cdef int i
+    for i in range(arbiters.num):
+        cpArbiterPreStep(<cpArbiter *>arbiters.arr[i], dt, slop, biasCoef)
+    for i in range(constraints.num):
+        constraint = <cpConstraint *>constraints.arr[i]
+        if constraint.preSolve != NULL:
+            constraint.preSolve(constraint, space)
+        constraint.klass.preStep(constraint, dt)
+
+cdef void StageIntegrateVelocities(cpSpace *space, cpFloat dt) noexcept nogil:
+    cdef cpArray *bodies = space.dynamicBodies
+    cdef cpFloat damping = pow(space.damping, dt)
+    cdef cpVect gravity = space.gravity
+    cdef cpBody *body
+    cdef int i
+    for i in range(bodies.num):
+        body = <cpBody *>bodies.arr[i]
+        body.velocity_func(body, gravity, damping, dt)
+
+# Warm start from last step's impulses, scaled by dt / prev_dt (never on the
+# first step).
+cdef void StageWarmStart(cpSpace *space, cpFloat dt, cpFloat prev_dt) noexcept nogil:
+    cdef cpArray *arbiters = space.arbiters
+    cdef cpArray *constraints = space.constraints
+    cdef cpConstraint *constraint
+    cdef cpFloat dt_coef = 0.0 if prev_dt == 0.0 else dt / prev_dt
+    cdef int i
+    for i in range(arbiters.num):
+        cpArbiterApplyCachedImpulse(<cpArbiter *>arbiters.arr[i], dt_coef)
+    for i in range(constraints.num):
+        constraint = <cpConstraint *>constraints.arr[i]
+        constraint.klass.applyCachedImpulse(constraint, dt_coef)
+
+# The impulse solver: `iterations` sequential passes over the arbiters, then
+# the constraints.
+cdef void StageSolve(cpSpace *space, cpFloat dt) noexcept nogil:
+    cdef cpArray *arbiters = space.arbiters
+    cdef cpArray *constraints = space.constraints
+    cdef cpConstraint *constraint
+    cdef int i, j
+    for i in range(space.iterations):
+        for j in range(arbiters.num):
+            cpArbiterApplyImpulse(<cpArbiter *>arbiters.arr[j])
+        for j in range(constraints.num):
+            constraint = <cpConstraint *>constraints.arr[j]
+            constraint.klass.applyImpulse(constraint, dt)
+
+# Post-solve callbacks: constraints, then arbiters.
+cdef void StagePostSolve(cpSpace *space) noexcept nogil:
+    cdef cpArray *arbiters = space.arbiters
+    cdef cpArray *constraints = space.constraints
+    cdef cpConstraint *constraint
+    cdef int i
+    for i in range(constraints.num):
+        constraint = <cpConstraint *>constraints.arr[i]
+        if constraint.postSolve != NULL:
+            constraint.postSolve(constraint, space)
+    for i in range(arbiters.num):
+        cpCallHandlers(<cpArbiter *>arbiters.arr[i], space, PHASE_POST_SOLVE, True)
+
+
+# -- components and sleeping (cpSpaceComponent.c, space side) ---------------------------------
+
+
+cdef void cpSpaceActivateBody(cpSpace *space, cpBody *body) noexcept nogil:
+    cdef cpShape *shape
+    cdef cpArbiter *arb
+    cdef cpBody *bodyA
+    cdef int numContacts
+    cdef cpContact *contacts
+    cdef const cpShape *shape_pair[2]
+    cdef cpHashValue arbHashID
+    cdef cpConstraint *constraint
+
+    if space.locked:
+        # Done again when the space unlocks.
+        if not cpArrayContains(space.rousedBodies, body):
+            cpArrayPush(space.rousedBodies, body)
+        return
+
+    cpArrayPush(space.dynamicBodies, body)
+
+    shape = body.shapeList
+    while shape != NULL:
+        cpSpatialIndexRemove(space.staticShapes, shape, shape.hashid)
+        cpSpatialIndexInsert(space.dynamicShapes, shape, shape.hashid)
+        shape = shape.next
+
+    arb = body.arbiterList
+    while arb != NULL:
+        bodyA = arb.body_a
+        # Both bodies of an arbiter wake together; body_a owns it (or body_b
+        # when body_a is static, as static bodies never sleep).
+        if body == bodyA or cpBodyGetType(bodyA) == CP_BODY_TYPE_STATIC:
+            numContacts = arb.count
+            contacts = arb.contacts
+            # Copy the contacts back from the heap into the contact buffer.
+            arb.contacts = cpContactBufferGetArray(space)
+            if arb.contacts != NULL:
+                memcpy(arb.contacts, contacts, numContacts * sizeof(cpContact))
+                cpSpacePushContacts(space, numContacts)
+            else:
+                arb.count = 0
+            shape_pair[0] = arb.a
+            shape_pair[1] = arb.b
+            arbHashID = CP_HASH_PAIR(<cpHashValue>arb.a, <cpHashValue>arb.b)
+            cpHashSetInsert(space.cachedArbiters, arbHashID, shape_pair, NULL, arb)
+            arb.stamp = space.stamp
+            cpArrayPush(space.arbiters, arb)
+            cpfree(contacts)
+        arb = cpArbiterNext(arb, body)
+
+    constraint = body.constraintList
+    while constraint != NULL:
+        bodyA = constraint.a
+        if body == bodyA or cpBodyGetType(bodyA) == CP_BODY_TYPE_STATIC:
+            cpArrayPush(space.constraints, constraint)
+        constraint = cpConstraintNext(constraint, body)
+
+cdef void cpSpaceDeactivateBody(cpSpace *space, cpBody *body) noexcept nogil:
+    cdef cpShape *shape
+    cdef cpArbiter *arb
+    cdef cpBody *bodyA
+    cdef size_t count
+    cdef cpContact *contacts
+    cdef cpConstraint *constraint
+
+    cpArrayDeleteObj(space.dynamicBodies, body)
+
+    shape = body.shapeList
+    while shape != NULL:
+        cpSpatialIndexRemove(space.dynamicShapes, shape, shape.hashid)
+        cpSpatialIndexInsert(space.staticShapes, shape, shape.hashid)
+        shape = shape.next
+
+    arb = body.arbiterList
+    while arb != NULL:
+        bodyA = arb.body_a
+        if body == bodyA or cpBodyGetType(bodyA) == CP_BODY_TYPE_STATIC:
+            cpSpaceUncacheArbiter(space, arb)
+            # Keep the contacts on the heap so that the buffer ring cannot
+            # recycle them while the body sleeps.
+            count = arb.count
+            contacts = <cpContact *>cpcalloc(count if count > 0 else 1, sizeof(cpContact))
+            if contacts != NULL:
+                memcpy(contacts, arb.contacts, count * sizeof(cpContact))
+            else:
+                arb.count = 0
+            arb.contacts = contacts
+        arb = cpArbiterNext(arb, body)
+
+    constraint = body.constraintList
+    while constraint != NULL:
+        bodyA = constraint.a
+        if body == bodyA or cpBodyGetType(bodyA) == CP_BODY_TYPE_STATIC:
+            cpArrayDeleteObj(space.constraints, constraint)
+        constraint = cpConstraintNext(constraint, body)
+
+cdef inline cpBody *ComponentRoot(cpBody *body) noexcept nogil:
+    return body.sleeping.root if body != NULL else NULL
+
+cdef inline void cpBodyPushArbiter(cpBody *body, cpArbiter *arb) noexcept nogil:
+    cdef cpArbiter *next = body.arbiterList
+    cpArbiterThreadForBody(arb, body).next = next
+    if next != NULL:
+        cpArbiterThreadForBody(next, body).prev = arb
+    body.arbiterList = arb
+
+cdef inline void ComponentAdd(cpBody *root, cpBody *body) noexcept nogil:
+    body.sleeping.root = root
+    if body != root:
+        body.sleeping.next = root.sleeping.next
+        root.sleeping.next = body
+
+cdef void FloodFillComponent(cpBody *root, cpBody *body) noexcept nogil:
+    # Kinematic bodies never sleep and keep what they touch awake; static
+    # bodies are asleep all the time; orphans (see _orphanBody) are left out.
+    # Recursive as in Munk2D.
+    cdef cpBody *other_root
+    cdef cpArbiter *arb
+    cdef cpConstraint *constraint
+    if cpBodyGetType(body) == CP_BODY_TYPE_DYNAMIC and not _orphanBody(body, root.space):
+        other_root = ComponentRoot(body)
+        if other_root == NULL:
+            ComponentAdd(root, body)
+            arb = body.arbiterList
+            while arb != NULL:
+                FloodFillComponent(root, arb.body_b if body == arb.body_a else arb.body_a)
+                arb = cpArbiterNext(arb, body)
+            constraint = body.constraintList
+            while constraint != NULL:
+                FloodFillComponent(root, constraint.b if body == constraint.a else constraint.a)
+                constraint = cpConstraintNext(constraint, body)
+
+cdef inline cpBool ComponentActive(cpBody *root, cpFloat threshold) noexcept nogil:
+    cdef cpBody *body = root
+    while body != NULL:
+        if body.sleeping.idleTime < threshold:
+            return 1
+        body = body.sleeping.next
+    return 0
+
+cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int threadCount) noexcept nogil:
+    cdef cpBool sleep = space.sleepTimeThreshold != INFINITY
+    cdef cpArray *bodies = space.dynamicBodies
+    cdef cpArray *arbiters
+    cdef cpArray *constraints
+    cdef cpFloat dv, dvsq, keThreshold
+    cdef int i, count
+    cdef cpBody *body
+    cdef cpBody *a
+    cdef cpBody *b
+    cdef cpBody *other
+    cdef cpArbiter *arb
+    cdef cpConstraint *constraint
+
+    if sleep:
+        dv = space.idleSpeedThreshold
+        dvsq = dv * dv if dv != 0.0 else cpvlengthsq(space.gravity) * dt * dt
+        # Update idle times.
+        for i in range(bodies.num):
+            body = <cpBody *>bodies.arr[i]
+            if cpBodyGetType(body) != CP_BODY_TYPE_DYNAMIC:
+                continue
+            keThreshold = body.m * dvsq if dvsq != 0.0 else 0.0
+            body.sleeping.idleTime = (0.0 if cpBodyKineticEnergy(body) > keThreshold
+                                      else body.sleeping.idleTime + dt)
+
+    # Wake sleeping bodies that are touched, and thread the arbiters found
+    # this step into their bodies' lists (head insertion, in array order).
+    # Arbiters appended from here on, by waking, are threaded already.
+    arbiters = space.arbiters
+    count = threadCount
+    for i in range(count):
+        arb = <cpArbiter *>arbiters.arr[i]
+        a = arb.body_a
+        b = arb.body_b
+        if sleep:
+            if (cpBodyGetType(b) == CP_BODY_TYPE_KINEMATIC or cpBodyIsSleeping(a)
+                    or _orphanBody(b, space)):
+                cpBodyActivate(a)
+            if (cpBodyGetType(a) == CP_BODY_TYPE_KINEMATIC or cpBodyIsSleeping(b)
+                    or _orphanBody(a, space)):
+                cpBodyActivate(b)
+        cpBodyPushArbiter(a, arb)
+        cpBodyPushArbiter(b, arb)
+
+    if sleep:
+        # Bodies jointed to a kinematic body stay awake.
+        constraints = space.constraints
+        i = 0
+        while i < constraints.num:
+            constraint = <cpConstraint *>constraints.arr[i]
+            a = constraint.a
+            b = constraint.b
+            if cpBodyGetType(b) == CP_BODY_TYPE_KINEMATIC:
+                cpBodyActivate(a)
+            if cpBodyGetType(a) == CP_BODY_TYPE_KINEMATIC:
+                cpBodyActivate(b)
+            i += 1
+
+        # Build the components and put the idle ones to sleep.
+        i = 0
+        while i < bodies.num:
+            body = <cpBody *>bodies.arr[i]
+            if ComponentRoot(body) == NULL:
+                FloodFillComponent(body, body)
+                if not ComponentActive(body, space.sleepTimeThreshold):
+                    cpArrayPush(space.sleepingComponents, body)
+                    other = body
+                    while other != NULL:
+                        cpSpaceDeactivateBody(space, other)
+                        other = other.sleeping.next
+                    # Deactivation swap-removed this body: same index again.
+                    continue
+            i += 1
+            # Only sleeping bodies keep their component links.
+            body.sleeping.root = NULL
+            body.sleeping.next = NULL
+
+
+
+# -- hooks for the body module -------------------------------------------------------------------
+
+cdef void cpSpaceWakeComponent(cpSpace *space, cpBody *root) noexcept nogil:
+    cdef cpBody *bodyA = root
+    cdef cpBody *next
+    while bodyA != NULL:
+        next = bodyA.sleeping.next
+        bodyA.sleeping.idleTime = 0.0
+        bodyA.sleeping.root = NULL
+        bodyA.sleeping.next = NULL
+        cpSpaceActivateBody(space, bodyA)
+        bodyA = next
+    cpArrayDeleteObj(space.sleepingComponents, root)
+
+cdef void _hookBodyTypeChanged(cpSpace *space, cpBody *body, cpBodyType oldType,
+                               cpBodyType type) noexcept nogil:
+    cdef cpArray *fromArray = cpSpaceArrayForBodyType(space, oldType)
+    cdef cpArray *toArray = cpSpaceArrayForBodyType(space, type)
+    cdef cpSpatialIndex *fromIndex
+    cdef cpSpatialIndex *toIndex
+    cdef cpShape *shape
+    if fromArray != toArray:
+        cpArrayDeleteObj(fromArray, body)
+        cpArrayPush(toArray, body)
+    fromIndex = space.staticShapes if oldType == CP_BODY_TYPE_STATIC else space.dynamicShapes
+    toIndex = space.staticShapes if type == CP_BODY_TYPE_STATIC else space.dynamicShapes
+    if fromIndex != toIndex:
+        shape = body.shapeList
+        while shape != NULL:
+            cpSpatialIndexRemove(fromIndex, shape, shape.hashid)
+            cpSpatialIndexInsert(toIndex, shape, shape.hashid)
+            shape = shape.next
+
+cdef void _hookSleepWithGroup(cpBody *body, cpBody *group) noexcept nogil:
+    cdef cpSpace *space = body.space
+    cdef cpShape *shape
+    cdef cpBody *root
+    cdef cpBody *other
+    cdef cpBody *groupRoot
+    cdef cpArbiter *arb
+    cdef cpArbiter *next_arb
+    if cpBodyIsSleeping(body):
+        return
+    shape = body.shapeList
+    while shape != NULL:
+        cpShapeCacheBB(shape)
+        shape = shape.next
+    # Forced to sleep while touching a body outside its new group: take
+    # those arbiters out of the contact graph. Munk2D leaves them threaded
+    # (and moves the contacts of those it owns to the heap); the next step
+    # finds the contact again, threads the arbiter a second time and frees a
+    # contact buffer pointer when it wakes the body. Unthreaded, the arbiter
+    # is an ordinary cached one: found again, it wakes this body. A neighbour
+    # asleep in another group is woken first, so that its own copy of the
+    # arbiter goes back to the cache rather than staying on the heap.
+    groupRoot = ComponentRoot(group)
+    arb = body.arbiterList
+    while arb != NULL:
+        next_arb = cpArbiterNext(arb, body)
+        other = arb.body_b if arb.body_a == body else arb.body_a
+        if (cpBodyGetType(other) != CP_BODY_TYPE_STATIC
+                and (groupRoot == NULL or other.sleeping.root != groupRoot)):
+            if cpBodyIsSleeping(other):
+                cpBodyActivate(other)
+            cpArbiterUnthread(arb)
+        arb = next_arb
+    cpSpaceDeactivateBody(space, body)
+    if group != NULL:
+        root = ComponentRoot(group)
+        body.sleeping.root = root
+        body.sleeping.next = root.sleeping.next
+        body.sleeping.idleTime = 0.0
+        root.sleeping.next = body
+    else:
+        body.sleeping.root = body
+        body.sleeping.next = NULL
+        body.sleeping.idleTime = 0.0
+        cpArrayPush(space.sleepingComponents, body)
+    cpArrayDeleteObj(space.dynamicBodies, body)
+
+cdef tamias_BodySpaceHooks _hooks
+_hooks.wake_component = cpSpaceWakeComponent
+_hooks.body_type_changed = _hookBodyTypeChanged
+_hooks.sleep_with_group = _hookSleepWithGroup
+tamias_set_body_space_hooks(&_hooks)
+
+
+cdef cpBody *_firstNonFiniteBody(cpArray *bodies) noexcept nogil:
+    # The setters refuse non-finite values, so only an overflow in a step can
+    # make one; checked after every step (and before, while one is left).
+    cdef cpBody *body
+    cdef int i
+    for i in range(bodies.num):
+        body = <cpBody *>bodies.arr[i]
+        if _bodyNonFinite(body):
+            return body
+    return NULL
+
+
+cdef void _clearNonFiniteContactImpulses(void *elt, void *data) noexcept nogil:
+    cdef cpArbiter *arb = <cpArbiter *>elt
+    cdef cpContact *con
+    cdef int i
+    for i in range(arb.count if arb.contacts != NULL else 0):
+        con = &arb.contacts[i]
+        if (con.jnAcc - con.jnAcc + con.jtAcc - con.jtAcc + con.jBias - con.jBias) != 0.0:
+            con.jnAcc = con.jtAcc = con.jBias = 0.0
+
+cdef void _forgetNonFiniteImpulses(cpSpace *space) noexcept nogil:
+    # After a step that overflowed: the warm-start impulses of contacts and
+    # joints may be inf or NaN too, and would make the bodies non-finite again
+    # at the next step even after the user resets them.
+    cdef cpConstraint *c
+    cdef int i
+    cpHashSetEach(space.cachedArbiters, _clearNonFiniteContactImpulses, NULL)
+    for i in range(space.arbiters.num):
+        _clearNonFiniteContactImpulses(space.arbiters.arr[i], NULL)
+    for i in range(space.constraints.num):
+        c = <cpConstraint *>space.constraints.arr[i]
+        if _bodyNonFinite(c.a) or _bodyNonFinite(c.b):
+            tamias_constraint_clear_impulse(c)
+
+
+cdef void _scanOrphans(void *obj, void *data) noexcept nogil:
+    cdef cpBody *body = (<cpShape *>obj).body
+    cdef OrphanScan *scan = <OrphanScan *>data
+    if body == NULL or not _orphanBody(body, scan.space):
+        return
+    scan.orphans += 1
+    if scan.bad == NULL and not (body.m > 0.0 and body.m < INFINITY and body.i > 0.0):
+        scan.bad = body
+
