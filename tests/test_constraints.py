@@ -283,7 +283,7 @@ def test_bodies_outside_the_space_are_moved_but_not_integrated():
 
 def test_step_releases_the_gil_with_joints():
     # As in test_space: while the step runs, another thread sees it under way
-    # and its add() is deferred. Only joints, no Python callbacks.
+    # and its add() waits for the step's end. Only joints, no Python callbacks.
     s = Space()
     prev = s.static_body
     for i in range(400):
@@ -294,19 +294,21 @@ def test_step_releases_the_gil_with_joints():
     s.iterations = 3000
     late = Body(1, 1)
     seen = []
+    returned = [False]
 
     def worker():
         while s.current_time_step == 0.0:
             time.sleep(0.0001)
-        s.add(late)
-        seen.append(late in s.bodies)
+        under_way = not returned[0]
+        s.add(late)  # waits for the step to end, then adds at once
+        seen.append((under_way, late in s.bodies))
 
     t = threading.Thread(target=worker)
     t.start()
     s.step(1 / 60)
+    returned[0] = True
     t.join()
-    assert seen == [False]
-    assert late in s.bodies
+    assert seen == [(True, True)]
 
 
 # -- callbacks -----------------------------------------------------------------------------------

@@ -684,10 +684,10 @@ def test_arbiter_keeps_space_alive():
 
 def test_step_releases_the_gil():
     # While one thread is inside a long step, another thread can run Python
-    # code: it sees the step under way (current_time_step already set) and
-    # its add() is deferred like an add from a callback. If the step held
-    # the GIL, the other thread could only run after the step, when add()
-    # is immediate. Decided by the order of events, not by timing.
+    # code: it sees the step under way (current_time_step already set, step()
+    # not returned). Its add() waits for the step to end and then adds at
+    # once (see _threadguard.pxd). Decided by the order of events, not by
+    # timing.
     s = Space()
     s.gravity = 0, -900
     s.add(Segment(s.static_body, (-500, 0), (500, 0), 5))
@@ -698,19 +698,21 @@ def test_step_releases_the_gil():
     s.iterations = 3000
     late = Body(1, 1)
     seen = []
+    returned = [False]
 
     def worker():
         while s.current_time_step == 0.0:
             time.sleep(0.0001)
-        s.add(late)
-        seen.append(late in s.bodies)
+        under_way = not returned[0]
+        s.add(late)  # waits for the step to end, then adds at once
+        seen.append((under_way, late in s.bodies))
 
     t = threading.Thread(target=worker)
     t.start()
     s.step(1 / 60)
+    returned[0] = True
     t.join()
-    assert seen == [False]  # deferred: the step was running
-    assert late in s.bodies  # and applied when it ended
+    assert seen == [(True, True)]  # ran during the step; add() waited for its end
 
 
 # -- queries ------------------------------------------------------------------------------------

@@ -136,3 +136,222 @@ def test_out_of_memory_state_is_per_thread():
         t.join()
     assert result == {"main": "ok", "worker": "MemoryError", "worker flag": False}
     assert not _containers._take_out_of_memory()
+
+
+# -- one space, two threads ------------------------------------------------------------------
+# While a space steps in one thread (without the GIL), a second thread that
+# touches the space or its bodies, shapes and joints waits for the step to
+# end (src/tamias2d/_threadguard.pxd). Each test hammers one kind of access
+# from a second thread for a while and then checks that the space is sound:
+# a consistent contact graph, still able to step and to take new objects.
+# Before the guard, each of these crashed, corrupted the heap or left the
+# space locked forever; they run in a child process so a crash is a failure.
+
+import time
+
+from isolated import isolated
+
+HAMMER_SECONDS = 1.0
+
+
+def sleepy_pile(use_spatial_hash=False, sleeping=True):
+    """Columns of boxes on the ground that fall asleep quickly (or, with
+    sleeping=False, stay awake so that every step does the full work)."""
+    s = tamias2d.Space()
+    s.gravity = 0, -900
+    s.sleep_time_threshold = 0.05
+    if use_spatial_hash:
+        s.use_spatial_hash(20, 2000)
+    ground = tamias2d.Segment(s.static_body, (-1000, 0), (1000, 0), 2)
+    ground.friction = 1
+    s.add(ground)
+    bodies = []
+    # Enough work per step (iterations, bodies) that the second thread gets
+    # the GIL many times while a step is under way.
+    s.iterations = 40
+    for col in range(40):
+        for row in range(8):
+            b = tamias2d.Body(1, tamias2d.moment_for_box(1, (10, 10)))
+            b.position = -800 + col * 40, 6 + row * 11
+            box = tamias2d.Poly.create_box(b, (10, 10))
+            box.friction = 1
+            s.add(b, box)
+            bodies.append(b)
+    for _ in range(120):
+        s.step(1 / 60)
+    if not sleeping:
+        s.sleep_time_threshold = float("inf")
+    return s, bodies
+
+
+def hammer(space, action):
+    """Run action(i) in a second thread while this thread steps `space`."""
+    stop = threading.Event()
+    errors = []
+    count = [0]
+
+    def work():
+        i = 0
+        try:
+            while not stop.is_set():
+                action(i)
+                i += 1
+        except BaseException as exc:  # reported by the main thread
+            errors.append(exc)
+        count[0] = i
+
+    t = threading.Thread(target=work)
+    t.start()
+    steps = 0
+    deadline = time.monotonic() + HAMMER_SECONDS
+    try:
+        while time.monotonic() < deadline and t.is_alive():
+            space.step(1 / 60)
+            steps += 1
+    finally:
+        stop.set()
+        t.join()
+    if errors:
+        raise errors[0]
+    assert steps > 0 and count[0] > 0
+
+
+def check_sound(space):
+    assert space._contact_graph_problem() is None
+    for _ in range(30):
+        space.step(1 / 60)
+    assert space._contact_graph_problem() is None
+    b = tamias2d.Body(1, 1)
+    space.add(b, tamias2d.Circle(b, 1))   # not left locked
+    space.step(1 / 60)
+
+
+@isolated(timeout=120)
+def test_waking_bodies_from_a_second_thread_while_stepping():
+    s, bodies = sleepy_pile()
+    assert any(b.is_sleeping for b in bodies)
+
+    def wake(i):
+        b = bodies[(i * 7) % len(bodies)]
+        op = i % 9
+        if op == 0:
+            b.activate()
+        elif op == 1:
+            b.velocity = (0, 1)
+        elif op == 2:
+            b.position = b.position
+        elif op == 3:
+            b.mass = 1
+        elif op == 4:
+            next(iter(b.shapes)).friction = 1
+        elif op == 5:
+            next(iter(b.shapes)).filter = tamias2d.ShapeFilter()
+        elif op == 6:
+            b.apply_impulse_at_local_point((0, 1))
+        elif op == 7:
+            s.gravity = (0, -900)
+        else:
+            s.sleep_time_threshold = 0.05
+
+    hammer(s, wake)
+    check_sound(s)
+
+
+@pytest.mark.parametrize("use_spatial_hash", [False, True])
+def test_queries_from_a_second_thread_while_stepping(use_spatial_hash):
+    @isolated(timeout=120)
+    def run():
+        s, bodies = sleepy_pile(use_spatial_hash, sleeping=False)
+        probe = tamias2d.Circle(None, 30)
+        probe.update(tamias2d.Transform.translation(0, 30))
+        f = tamias2d.ShapeFilter()
+
+        def query(i):
+            op = i % 5
+            if op == 0:
+                s.point_query((i % 800 - 400, 20), 15, f)
+            elif op == 1:
+                s.bb_query(tamias2d.BB(-100, 0, 100, 60), f)
+            elif op == 2:
+                s.segment_query((-500, 30), (500, 30), 1, f)
+            elif op == 3:
+                s.segment_query_first((-500, 30), (500, 30), 1, f)
+            else:
+                s.point_query_nearest((0, 20), 50, f)
+
+        hammer(s, query)
+        check_sound(s)
+
+    run()
+
+
+@isolated(timeout=120)
+def test_new_vertices_from_a_second_thread_while_stepping():
+    s, bodies = sleepy_pile(sleeping=False)
+    polys = [next(iter(b.shapes)) for b in bodies]
+    # Polygons with more than a few vertices keep them on the heap: each
+    # change of count reallocates them under the narrow phase's feet.
+    import math
+    shapes = [[(5.5 * math.cos(2 * math.pi * k / n), 5.5 * math.sin(2 * math.pi * k / n))
+               for k in range(n)] for n in (3, 9, 16)]
+
+    def reshape(i):
+        polys[(i * 13) % len(polys)].unsafe_set_vertices(shapes[i % 3])
+
+    hammer(s, reshape)
+    check_sound(s)
+
+
+@isolated(timeout=60)
+def test_a_second_thread_waits_for_the_step_to_end():
+    # The step's pre-solve callback (run by the stepping thread) releases
+    # the GIL for a while; a second thread's setter issued meanwhile must not
+    # complete until the step is over, and the callback's own accesses go
+    # through at once.
+    s = tamias2d.Space()
+    s.gravity = 0, -100
+    ball = tamias2d.Body(1, 10)
+    ball.position = 0, 4
+    s.add(ball, tamias2d.Circle(ball, 5), tamias2d.Segment(s.static_body, (-50, 0), (50, 0), 1))
+    inside = threading.Event()
+    in_callback = [False]
+    seen = []
+
+    def pre_solve(arbiter, space, data):
+        in_callback[0] = True
+        ball.angular_velocity = 0.5    # the stepping thread itself: no wait
+        inside.set()
+        time.sleep(0.3)                # releases the GIL
+        in_callback[0] = False
+
+    s.on_collision(pre_solve=pre_solve)
+
+    def other():
+        inside.wait(10)
+        ball.velocity = 1, 0           # waits for the step
+        seen.append(in_callback[0])
+
+    t = threading.Thread(target=other)
+    t.start()
+    s.step(1 / 60)
+    t.join()
+    assert seen == [False]
+    assert ball.velocity == (1, 0)
+
+
+def test_two_threads_stepping_one_space_take_turns():
+    # A second step() of the same space waits for the first instead of
+    # running into it; the results equal two steps in a row.
+    base = scenes.pyramid(tamias2d, rows=10)
+    for _ in range(10):
+        base.step(1 / 60)
+    a, b = base.copy(), base.copy()
+    threads = [threading.Thread(target=lambda: [a.step(1 / 60) for _ in range(20)])
+               for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for _ in range(40):
+        b.step(1 / 60)
+    assert snapshot(a) == snapshot(b)

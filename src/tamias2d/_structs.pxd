@@ -361,3 +361,9 @@ cdef struct cpSpace:
     cpArray *postStepCallbacks
     cpBody *staticBody
     cpBody _staticBody
+    # Not in Munk2D: the thread stepping this space without the GIL (0 when
+    # none), the lock it holds meanwhile and the number of other threads
+    # waiting for that step to end (see _threadguard.pxd).
+    unsigned long stepThread
+    void *stepLock
+    int stepWaiters

@@ -46,6 +46,7 @@ from tamias2d.body cimport (Body, cpBodyGetPosition, cpBodySetPosition, cpBodySe
     cpBodySetVelocity, cpBodySetAngularVelocity, cpBodySetForce, cpBodySetTorque)
 from tamias2d.shape cimport Shape
 from tamias2d.space cimport Space
+from tamias2d._threadguard cimport tamias_wait_for_step
 from tamias2d.arbiter cimport (cpArbiterGetBodies, cpArbiterGetShapes,
     cpArbiterGetContactPointSet, cpArbiterTotalImpulse, cpArbiterTotalKE,
     cpArbiterIsFirstContact)
@@ -156,6 +157,7 @@ def get_bodies(space, fields, out=None):
     array([[3. , 4. , 0.5]])
     """
     cdef Space sp = _space_arg(space)
+    tamias_wait_for_step(&sp._space)
     cdef tuple codes = _parse_fields(fields)
     cdef Py_ssize_t n = len(sp._bodies)
     cdef int width = _width(codes)
@@ -183,6 +185,7 @@ def get_bodies(space, fields, out=None):
     cdef cpBody *body
     cdef cpVect p
     cdef int col
+    tamias_wait_for_step(&sp._space)
     while PyDict_Next(sp._bodies, &pos, &key, &value):
         if row >= n:   # cannot happen while we hold the GIL; keeps the writes in bounds
             break
@@ -241,6 +244,7 @@ def set_bodies(space, values, fields):
     Vec2d(3.0, 4.0)
     """
     cdef Space sp = _space_arg(space)
+    tamias_wait_for_step(&sp._space)
     cdef tuple codes = _parse_fields(fields)
     cdef Py_ssize_t n = len(sp._bodies)
     cdef int width = _width(codes)
@@ -273,6 +277,7 @@ def set_bodies(space, values, fields):
     cdef PyObject *key
     cdef PyObject *value
     cdef cpBody *body
+    tamias_wait_for_step(&sp._space)
     while PyDict_Next(sp._bodies, &pos, &key, &value):
         if row >= n:
             break
@@ -312,6 +317,7 @@ def get_body_ids(space):
     True
     """
     cdef Space sp = _space_arg(space)
+    tamias_wait_for_step(&sp._space)
     cdef Py_ssize_t n = len(sp._bodies)
     np = _np()
     out = np.empty(n, dtype=np.uintp)
@@ -321,6 +327,7 @@ def get_body_ids(space):
     cdef Py_ssize_t pos = 0, row = 0
     cdef PyObject *key
     cdef PyObject *value
+    tamias_wait_for_step(&sp._space)
     while PyDict_Next(sp._bodies, &pos, &key, &value):
         if row >= n:
             break
@@ -398,6 +405,7 @@ cdef int _index_bodies(PtrIndex *table, Space sp) except -1:
     cdef int64_t row = 0
     cdef PyObject *key
     cdef PyObject *value
+    tamias_wait_for_step(&sp._space)
     while PyDict_Next(sp._bodies, &pos, &key, &value):
         _index_put(table, <uintptr_t>&(<Body>key)._body, row)
         row += 1
@@ -515,6 +523,7 @@ def get_arbiters(space, fields=None):
     [-1, 0]
     """
     cdef Space sp = _space_arg(space)
+    tamias_wait_for_step(&sp._space)
     np = _np()
     dtype = arbiter_dtype()
     if fields is not None:
@@ -554,6 +563,11 @@ def get_arbiters(space, fields=None):
             _index_bodies(&bodies, sp)
         if want_shapes:
             _index_shapes(&shapes, sp)
+        # Python ran since m was read (the array, the indexes): if another
+        # thread stepped the space meanwhile, start again.
+        tamias_wait_for_step(&sp._space)
+        if arbiters.num != m:
+            return get_arbiters(space, fields)
         for i in range(m):
             arb = <cpArbiter *>arbiters.arr[i]
             cpArbiterGetShapes(arb, &sa, &sb)

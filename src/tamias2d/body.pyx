@@ -36,6 +36,7 @@ STATIC = <int>CP_BODY_TYPE_STATIC
 
 
 # The helpers of chipmunk_private.h are in _private.pxd.
+from tamias2d._threadguard cimport tamias_wait_body
 from tamias2d._private cimport cpArbiterNext, cpConstraintNext, apply_impulse
 
 
@@ -674,6 +675,7 @@ cdef class Body:
         if not (m > 0.0) and _in_a_space(&self._body):
             raise IllegalBody("Dynamic bodies must have mass > 0 if they are attached to a Space.")
         _check_invertible(m, "Mass")
+        tamias_wait_body(&self._body)
         cpBodySetMass(&self._body, m)
 
     @property
@@ -699,6 +701,7 @@ cdef class Body:
         if not (i > 0.0) and _in_a_space(&self._body):
             raise IllegalBody("Dynamic bodies must have moment > 0 if they are attached to a Space.")
         _check_invertible(i, "Moment of inertia")
+        tamias_wait_body(&self._body)
         cpBodySetMoment(&self._body, i)
 
     @property
@@ -718,7 +721,9 @@ cdef class Body:
 
     @center_of_gravity.setter
     def center_of_gravity(self, cog):
-        cpBodySetCenterOfGravity(&self._body, _finite_vect(cog, "center_of_gravity"))
+        cdef cpVect value = _finite_vect(cog, "center_of_gravity")
+        tamias_wait_body(&self._body)
+        cpBodySetCenterOfGravity(&self._body, value)
 
     # -- motion state ------------------------------------------------------------
     @property
@@ -734,11 +739,14 @@ cdef class Body:
         >>> b.position
         Vec2d(1.0, 2.0)
         """
+        tamias_wait_body(&self._body)
         return vec2d_from_cpv(cpBodyGetPosition(&self._body))
 
     @position.setter
     def position(self, pos):
-        cpBodySetPosition(&self._body, _finite_vect(pos, "position"))
+        cdef cpVect value = _finite_vect(pos, "position")
+        tamias_wait_body(&self._body)
+        cpBodySetPosition(&self._body, value)
 
     @property
     def velocity(self):
@@ -750,11 +758,14 @@ cdef class Body:
         >>> b.velocity
         Vec2d(3.0, 4.0)
         """
+        tamias_wait_body(&self._body)
         return vec2d_from_cpv(self._body.v)
 
     @velocity.setter
     def velocity(self, vel):
-        cpBodySetVelocity(&self._body, _finite_vect(vel, "velocity"))
+        cdef cpVect value = _finite_vect(vel, "velocity")
+        tamias_wait_body(&self._body)
+        cpBodySetVelocity(&self._body, value)
 
     @property
     def force(self):
@@ -768,11 +779,14 @@ cdef class Body:
         >>> b.force
         Vec2d(4.0, 5.0)
         """
+        tamias_wait_body(&self._body)
         return vec2d_from_cpv(self._body.f)
 
     @force.setter
     def force(self, f):
-        cpBodySetForce(&self._body, _finite_vect(f, "force"))
+        cdef cpVect value = _finite_vect(f, "force")
+        tamias_wait_body(&self._body)
+        cpBodySetForce(&self._body, value)
 
     @property
     def angle(self):
@@ -784,11 +798,14 @@ cdef class Body:
         >>> b.angle
         1.5
         """
+        tamias_wait_body(&self._body)
         return self._body.a
 
     @angle.setter
     def angle(self, angle):
-        cpBodySetAngle(&self._body, _finite_float(angle, "angle"))
+        cdef double value = _finite_float(angle, "angle")
+        tamias_wait_body(&self._body)
+        cpBodySetAngle(&self._body, value)
 
     @property
     def angular_velocity(self):
@@ -800,11 +817,14 @@ cdef class Body:
         >>> b.angular_velocity
         2.0
         """
+        tamias_wait_body(&self._body)
         return self._body.w
 
     @angular_velocity.setter
     def angular_velocity(self, w):
-        cpBodySetAngularVelocity(&self._body, _finite_float(w, "angular_velocity"))
+        cdef double value = _finite_float(w, "angular_velocity")
+        tamias_wait_body(&self._body)
+        cpBodySetAngularVelocity(&self._body, value)
 
     @property
     def torque(self):
@@ -816,11 +836,14 @@ cdef class Body:
         >>> b.torque
         1.25
         """
+        tamias_wait_body(&self._body)
         return self._body.t
 
     @torque.setter
     def torque(self, t):
-        cpBodySetTorque(&self._body, _finite_float(t, "torque"))
+        cdef double value = _finite_float(t, "torque")
+        tamias_wait_body(&self._body)
+        cpBodySetTorque(&self._body, value)
 
     @property
     def rotation_vector(self):
@@ -830,6 +853,7 @@ cdef class Body:
         >>> tamias2d.Body(1, 1).rotation_vector
         Vec2d(1.0, 0.0)
         """
+        tamias_wait_body(&self._body)
         return vec2d_from_cpv(cpBodyGetRotation(&self._body))
 
     @property
@@ -842,6 +866,7 @@ cdef class Body:
         >>> b.kinetic_energy
         18.0
         """
+        tamias_wait_body(&self._body)
         return cpBodyKineticEnergy(&self._body)
 
     # -- type, space and attached objects ----------------------------------------
@@ -864,6 +889,7 @@ cdef class Body:
     @body_type.setter
     def body_type(self, body_type):
         cdef int t = _body_type_from_object(body_type)
+        tamias_wait_body(&self._body)
         if self._body.space != NULL and self._body.space.locked:
             raise SpaceLocked("The body type cannot change while the space is locked "
                               "(during a step or a query); use a post-step callback.")
@@ -940,6 +966,7 @@ cdef class Body:
         >>> tamias2d.Body(1, 1).is_sleeping
         False
         """
+        tamias_wait_body(&self._body)
         return <bint>cpBodyIsSleeping(&self._body)
 
     # -- integrators --------------------------------------------------------------
@@ -969,6 +996,9 @@ cdef class Body:
 
     @velocity_func.setter
     def velocity_func(self, func):
+        if func is not None and not callable(func):
+            raise TypeError("velocity_func must be callable or None, not %r" % (func,))
+        tamias_wait_body(&self._body)
         if func is None or func is _default_update_velocity:
             self._velocity_func = None
             self._body.velocity_func = cpBodyUpdateVelocity
@@ -996,6 +1026,9 @@ cdef class Body:
 
     @position_func.setter
     def position_func(self, func):
+        if func is not None and not callable(func):
+            raise TypeError("position_func must be callable or None, not %r" % (func,))
+        tamias_wait_body(&self._body)
         if func is None or func is _default_update_position:
             self._position_func = None
             self._body.position_func = cpBodyUpdatePosition
@@ -1021,6 +1054,7 @@ cdef class Body:
         cdef cpVect g = _finite_vect(gravity, "gravity")
         if not (_finite(damping) and _finite(dt)):
             raise IllegalBody("damping and dt must be finite, got %r and %r." % (damping, dt))
+        tamias_wait_body(&body._body)
         cpBodyUpdateVelocity(&body._body, g, damping, dt)
 
     @staticmethod
@@ -1036,6 +1070,7 @@ cdef class Body:
         """
         if not _finite(dt):
             raise IllegalBody("dt must be finite, got %r." % dt)
+        tamias_wait_body(&body._body)
         cpBodyUpdatePosition(&body._body, dt)
 
     # -- forces and impulses ---------------------------------------------------------
@@ -1049,10 +1084,12 @@ cdef class Body:
         >>> b.force, b.torque
         (Vec2d(10.0, 0.0), -60.0)
         """
+        cdef cpVect j = _finite_vect(force, "force")
+        cdef cpVect at = _finite_vect(point, "force application point")
+        tamias_wait_body(&self._body)
         cdef cpVect a0 = self._body.f
         cdef cpFloat b0 = self._body.t
-        cpBodyApplyForceAtWorldPoint(&self._body, _finite_vect(force, "force"),
-                                     _finite_vect(point, "force application point"))
+        cpBodyApplyForceAtWorldPoint(&self._body, j, at)
         _undo_overflow(&self._body, a0, b0, False)
 
     def apply_force_at_local_point(self, force, point=(0, 0)):
@@ -1064,10 +1101,12 @@ cdef class Body:
         >>> b.force, b.torque
         (Vec2d(10.0, 0.0), -100.0)
         """
+        cdef cpVect j = _finite_vect(force, "force")
+        cdef cpVect at = _finite_vect(point, "force application point")
+        tamias_wait_body(&self._body)
         cdef cpVect a0 = self._body.f
         cdef cpFloat b0 = self._body.t
-        cpBodyApplyForceAtLocalPoint(&self._body, _finite_vect(force, "force"),
-                                     _finite_vect(point, "force application point"))
+        cpBodyApplyForceAtLocalPoint(&self._body, j, at)
         _undo_overflow(&self._body, a0, b0, False)
 
     def apply_impulse_at_world_point(self, impulse, point):
@@ -1080,10 +1119,12 @@ cdef class Body:
         >>> b.velocity, b.angular_velocity
         (Vec2d(10.0, 0.0), -30.0)
         """
+        cdef cpVect j = _finite_vect(impulse, "impulse")
+        cdef cpVect at = _finite_vect(point, "impulse application point")
+        tamias_wait_body(&self._body)
         cdef cpVect a0 = self._body.v
         cdef cpFloat b0 = self._body.w
-        cpBodyApplyImpulseAtWorldPoint(&self._body, _finite_vect(impulse, "impulse"),
-                                       _finite_vect(point, "impulse application point"))
+        cpBodyApplyImpulseAtWorldPoint(&self._body, j, at)
         _undo_overflow(&self._body, a0, b0, True)
 
     def apply_impulse_at_local_point(self, impulse, point=(0, 0)):
@@ -1095,10 +1136,12 @@ cdef class Body:
         >>> b.velocity, b.angular_velocity
         (Vec2d(10.0, 0.0), -50.0)
         """
+        cdef cpVect j = _finite_vect(impulse, "impulse")
+        cdef cpVect at = _finite_vect(point, "impulse application point")
+        tamias_wait_body(&self._body)
         cdef cpVect a0 = self._body.v
         cdef cpFloat b0 = self._body.w
-        cpBodyApplyImpulseAtLocalPoint(&self._body, _finite_vect(impulse, "impulse"),
-                                       _finite_vect(point, "impulse application point"))
+        cpBodyApplyImpulseAtLocalPoint(&self._body, j, at)
         _undo_overflow(&self._body, a0, b0, True)
 
     # -- coordinates ------------------------------------------------------------------
@@ -1157,6 +1200,7 @@ cdef class Body:
         >>> b.is_sleeping
         False
         """
+        tamias_wait_body(&self._body)
         cpBodyActivate(&self._body)
 
     def sleep(self):
@@ -1173,6 +1217,7 @@ cdef class Body:
         ...
         tamias2d.errors.NotInSpace: Body not added to space
         """
+        tamias_wait_body(&self._body)
         _check_can_sleep(self, None)
         cpBodySleepWithGroup(&self._body, NULL)
 
@@ -1193,6 +1238,7 @@ cdef class Body:
             if not isinstance(body, Body):
                 raise TypeError("sleep_with_group expects a Body or None, not %r" % (body,))
             group = <Body>body
+        tamias_wait_body(&self._body)
         _check_can_sleep(self, group)
         if cpBodyIsSleeping(&self._body):
             return      # same group, checked above
@@ -1214,9 +1260,11 @@ cdef class Body:
         []
         """
         cdef cpBody *body = &self._body
-        cdef cpArbiter *arb = body.arbiterList
+        cdef cpArbiter *arb
         cdef cpArbiter *next_arb
         cdef cpBool swapped
+        tamias_wait_body(body)
+        arb = body.arbiterList
         if arb == NULL or body.space == NULL:
             return
         space = self.space

@@ -19,6 +19,7 @@ from libc.stdlib cimport malloc, calloc, free
 from libc.string cimport memcpy, memset
 from libc.limits cimport INT_MAX
 
+from tamias2d._threadguard cimport tamias_wait_shape
 from tamias2d._config cimport (cpFloat, cpBool, cpHashValue, cpCollisionType, cpGroup,
     cpBitmask, CP_POLY_SHAPE_INLINE_ALLOC, CP_ALL_CATEGORIES, CP_NO_GROUP, MAGIC_EPSILON)
 from tamias2d._structs cimport (cpBody, cpShape, cpShapeClass, cpCircleShape,
@@ -1112,6 +1113,7 @@ cdef class Shape:
     def mass(self, mass):
         cdef cpFloat m = _mass_arg(mass, "mass")
         _check_massive(&self._shape.massInfo, m)
+        tamias_wait_shape(self._shape)
         cpShapeSetMass(self._shape, m)
 
     @property
@@ -1130,6 +1132,7 @@ cdef class Shape:
     def density(self, density):
         cdef cpFloat d = _mass_arg(density, "density")
         _check_massive(&self._shape.massInfo, d * self._shape.massInfo.area)
+        tamias_wait_shape(self._shape)
         cpShapeSetDensity(self._shape, d)
 
     @property
@@ -1179,7 +1182,9 @@ cdef class Shape:
 
     @sensor.setter
     def sensor(self, is_sensor):
-        cpShapeSetSensor(self._shape, 1 if is_sensor else 0)
+        cdef cpBool value = 1 if is_sensor else 0
+        tamias_wait_shape(self._shape)
+        cpShapeSetSensor(self._shape, value)
 
     @property
     def collision_type(self):
@@ -1195,7 +1200,9 @@ cdef class Shape:
 
     @collision_type.setter
     def collision_type(self, t):
-        cpShapeSetCollisionType(self._shape, <cpCollisionType>t)
+        cdef cpCollisionType value = t
+        tamias_wait_shape(self._shape)
+        cpShapeSetCollisionType(self._shape, value)
 
     @property
     def filter(self):
@@ -1220,6 +1227,7 @@ cdef class Shape:
         cf.group = group
         cf.categories = categories
         cf.mask = mask
+        tamias_wait_shape(self._shape)
         cpShapeSetFilter(self._shape, cf)
 
     @property
@@ -1237,7 +1245,9 @@ cdef class Shape:
 
     @elasticity.setter
     def elasticity(self, e):
-        cpShapeSetElasticity(self._shape, _nonneg_arg(e, "elasticity"))
+        cdef cpFloat value = _nonneg_arg(e, "elasticity")
+        tamias_wait_shape(self._shape)
+        cpShapeSetElasticity(self._shape, value)
 
     @property
     def friction(self):
@@ -1253,7 +1263,9 @@ cdef class Shape:
 
     @friction.setter
     def friction(self, u):
-        cpShapeSetFriction(self._shape, _nonneg_arg(u, "friction"))
+        cdef cpFloat value = _nonneg_arg(u, "friction")
+        tamias_wait_shape(self._shape)
+        cpShapeSetFriction(self._shape, value)
 
     @property
     def surface_velocity(self):
@@ -1270,7 +1282,9 @@ cdef class Shape:
 
     @surface_velocity.setter
     def surface_velocity(self, surface_v):
-        cpShapeSetSurfaceVelocity(self._shape, cpv_from_object_finite(surface_v, "surface_velocity"))
+        cdef cpVect value = cpv_from_object_finite(surface_v, "surface_velocity")
+        tamias_wait_shape(self._shape)
+        cpShapeSetSurfaceVelocity(self._shape, value)
 
     @property
     def body(self):
@@ -1298,6 +1312,7 @@ cdef class Shape:
                                  "remove the shape from the space first")
         if self._body_obj is not None and self._body_obj._shapes is not None:
             self._body_obj._shapes.pop(self, None)
+        tamias_wait_shape(self._shape)
         cpShapeSetBody(self._shape, NULL if b is None else &b._body)
         if b is not None:
             b._shapes[self] = None
@@ -1340,6 +1355,7 @@ cdef class Shape:
         """
         if self._shape.body == NULL:
             raise IllegalBody("cache_bb needs a body; use update(transform) for a shape without one")
+        tamias_wait_shape(self._shape)
         return bb_from_cpbb(cpShapeCacheBB(self._shape))
 
     def update(self, transform):
@@ -1352,6 +1368,7 @@ cdef class Shape:
         BB(left=0.0, bottom=1.0, right=10.0, top=11.0)
         """
         cdef cpTransform t = cptransform_from_object(transform)
+        tamias_wait_shape(self._shape)
         return bb_from_cpbb(cpShapeUpdate(self._shape, t))
 
     def point_query(self, p):
@@ -1555,6 +1572,7 @@ cdef class Circle(Shape):
         3.0
         """
         cdef cpFloat radius = _radius_arg(r, "radius")
+        tamias_wait_shape(self._shape)
         cpCircleShapeSetRadius(self._shape, radius)
 
     def unsafe_set_offset(self, o):
@@ -1568,6 +1586,7 @@ cdef class Circle(Shape):
         Vec2d(3.0, 4.0)
         """
         cdef cpVect c = cpv_from_object_finite(o, "offset")
+        tamias_wait_shape(self._shape)
         cpCircleShapeSetOffset(self._shape, c)
 
 
@@ -1649,6 +1668,7 @@ cdef class Segment(Shape):
         """
         cdef cpVect p = cpv_from_object_finite(prev, "prev")
         cdef cpVect n = cpv_from_object_finite(next, "next")
+        tamias_wait_shape(self._shape)
         cpSegmentShapeSetNeighbors(self._shape, p, n)
 
     def unsafe_set_endpoints(self, a, b):
@@ -1667,6 +1687,7 @@ cdef class Segment(Shape):
         cdef cpShapeMassInfo info = cpSegmentShapeMassInfo(
             self._shape.massInfo.m, ca, cb, self._segment.r)
         _check_massive(&info, info.m)
+        tamias_wait_shape(self._shape)
         cpSegmentShapeSetEndpoints(self._shape, ca, cb)
 
     def unsafe_set_radius(self, r):
@@ -1680,6 +1701,7 @@ cdef class Segment(Shape):
         5.0
         """
         cdef cpFloat radius = _radius_arg(r, "radius")
+        tamias_wait_shape(self._shape)
         cpSegmentShapeSetRadius(self._shape, radius)
 
 
@@ -1811,7 +1833,9 @@ cdef class Poly(Shape):
         >>> p.radius
         3.0
         """
-        cpPolyShapeSetRadius(self._shape, _radius_arg(radius, "radius"))
+        cdef cpFloat r = _radius_arg(radius, "radius")
+        tamias_wait_shape(self._shape)
+        cpPolyShapeSetRadius(self._shape, r)
 
     def unsafe_set_vertices(self, vertices, transform=None):
         """Replace the vertices (and the mass data). Without a transform the
@@ -1834,6 +1858,7 @@ cdef class Poly(Shape):
         if transform is None:
             info = cpPolyShapeMassInfo(self._shape.massInfo.m, buf.count, buf.verts, self._poly.r)
             _check_massive(&info, info.m)
+            tamias_wait_shape(self._shape)
             ok = cpPolyShapeSetVertsRaw(self._shape, buf.count, buf.verts)
         else:
             t = cptransform_from_object(transform)
@@ -1849,6 +1874,7 @@ cdef class Poly(Shape):
                 _check_massive(&info, info.m)
             finally:
                 free(hull)
+            tamias_wait_shape(self._shape)
             ok = cpPolyShapeSetVerts(self._shape, buf.count, buf.verts, t)
         if not ok:
             _poly_init_failed(self)

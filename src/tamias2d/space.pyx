@@ -72,6 +72,8 @@ from tamias2d.shape import PointQueryInfo, SegmentQueryInfo, ShapeQueryInfo
 from tamias2d.errors import (IllegalBody, IllegalShape, SpaceLocked, AlreadyInSpace,
     NotInSpace, IllegalCollisionType)
 
+from tamias2d._threadguard cimport (tamias_wait_for_step, tamias_wait_body, tamias_begin_step,
+    tamias_end_step, tamias_step_lock_new, tamias_step_lock_free)
 from tamias2d._private cimport (cpConstraintNext, cpSpaceArrayForBodyType,
     cpCallHandlers, PHASE_SEPARATE)
 from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, cpSpaceGetPostStepCallback,
@@ -720,6 +722,7 @@ cdef class Space:
             raise MemoryError("not enough memory for a new Space")
         self._initialized = True
         self._space.userData = <void *>self
+        tamias_step_lock_new(&self._space)
         self._bodies = {}
         self._shapes = {}
         self._constraints = {}
@@ -738,6 +741,7 @@ cdef class Space:
 
     def __dealloc__(self):
         cdef cpCollisionHandler *h
+        tamias_step_lock_free(&self._space)
         if not self._initialized:
             return
         # No Python callback may run while the space is torn down.
@@ -870,6 +874,7 @@ cdef class Space:
         cdef long v = value
         if v <= 0 or v > 2147483647:
             raise ValueError("iterations must be a positive integer")
+        tamias_wait_for_step(&self._space)
         self._space.iterations = <int>v
 
     @property
@@ -887,6 +892,7 @@ cdef class Space:
     @gravity.setter
     def gravity(self, gravity_vector):
         cdef cpVect g = cpv_from_object_finite(gravity_vector, "gravity")
+        tamias_wait_for_step(&self._space)
         cpSpaceSetGravity(&self._space, g)
 
     @property
@@ -905,6 +911,7 @@ cdef class Space:
         cdef double d = damping
         if not (d >= 0.0) or not isfinite(d):
             raise ValueError("damping must be a finite number >= 0")
+        tamias_wait_for_step(&self._space)
         self._space.damping = d
 
     @property
@@ -923,6 +930,7 @@ cdef class Space:
         cdef double v = value
         if v != v:
             raise ValueError("idle_speed_threshold must be a number, not NaN")
+        tamias_wait_for_step(&self._space)
         self._space.idleSpeedThreshold = v
 
     @property
@@ -945,6 +953,7 @@ cdef class Space:
         if v != v:
             raise ValueError("sleep_time_threshold must be a number (inf turns sleeping off), "
                              "not NaN")
+        tamias_wait_for_step(&self._space)
         self._space.sleepTimeThreshold = v
         if v == INFINITY:
             # Sleeping off: wake everything that sleeps, as Box2D does. Munk2D
@@ -972,6 +981,7 @@ cdef class Space:
         # an infinite slop gives the contacts an infinite bias: NaN bodies
         if not isfinite(slop):
             raise ValueError(f"collision_slop must be a finite number, not {value!r}")
+        tamias_wait_for_step(&self._space)
         self._space.collisionSlop = slop
 
     @property
@@ -987,7 +997,9 @@ cdef class Space:
 
     @collision_bias.setter
     def collision_bias(self, value):
-        self._space.collisionBias = value
+        cdef double bias = value
+        tamias_wait_for_step(&self._space)
+        self._space.collisionBias = bias
 
     @property
     def collision_persistence(self):
@@ -1008,6 +1020,7 @@ cdef class Space:
         cdef long long v = value
         if v < 0 or v > 4294967295:
             raise ValueError("collision_persistence must be between 0 and 2**32-1")
+        tamias_wait_for_step(&self._space)
         self._space.collisionPersistence = <cpTimestamp>v
 
     @property
@@ -1072,6 +1085,7 @@ cdef class Space:
         >>> list(s.bodies) == [b] and list(s.shapes) == [c]
         True
         """
+        tamias_wait_for_step(&self._space)
         if self._locked:
             for o in objs:
                 self._add_later[o] = None
@@ -1143,6 +1157,7 @@ cdef class Space:
         >>> len(s.shapes), len(s.bodies)
         (0, 0)
         """
+        tamias_wait_for_step(&self._space)
         if self._locked:
             for o in objs:
                 self._remove_later[o] = None
@@ -1208,6 +1223,7 @@ cdef class Space:
                               "Wait until the current query or step is complete.")
         if sh._shape.space != &self._space:
             raise NotInSpace("the shape is not in this space")
+        tamias_wait_for_step(&self._space)
         cpSpaceReindexShape(&self._space, sh._shape)
 
     def reindex_shapes_for_body(self, body):
@@ -1226,6 +1242,7 @@ cdef class Space:
         if cpSpaceIsLocked(&self._space):
             raise SpaceLocked("You cannot manually reindex objects while the space is locked. "
                               "Wait until the current query or step is complete.")
+        tamias_wait_for_step(&self._space)
         cpSpaceReindexShapesForBody(&self._space, &b._body)
 
     def reindex_static(self):
@@ -1244,6 +1261,7 @@ cdef class Space:
         if cpSpaceIsLocked(&self._space):
             raise SpaceLocked("You cannot manually reindex objects while the space is locked. "
                               "Wait until the current query or step is complete.")
+        tamias_wait_for_step(&self._space)
         cpSpaceReindexStatic(&self._space)
 
     def use_spatial_hash(self, dim, count):
@@ -1266,6 +1284,7 @@ cdef class Space:
             raise ValueError("dim must be a finite number > 0")
         if ccount <= 0 or ccount > 2147483647:
             raise ValueError("count must be a positive integer")
+        tamias_wait_for_step(&self._space)
         if self._locked or cpSpaceIsLocked(&self._space):
             raise SpaceLocked("use_spatial_hash cannot be called during a step or a query")
         if not cpSpaceUseSpatialHash(&self._space, cdim, <int>ccount):
@@ -1359,18 +1378,28 @@ cdef class Space:
             # pymunk takes a negative dt and integrates backwards, with the
             # damping as pow(damping, dt): inf for a damping of 0.
             raise ValueError(f"dt must be a finite number >= 0, not {dt!r}")
+        # Another thread stepping this space: wait for its step to end.
+        tamias_wait_for_step(&self._space)
         if cpSpaceIsLocked(&self._space) or self._locked:
             raise SpaceLocked("step() cannot be called from inside a step or a query")
-        self._check_bodies()
-        if self._space.constraints.num:
-            tamias_check_constraints(&self._space)
-        self._locked = True
+        # From here on other threads wait for this step (beginning may let
+        # them run first, so the checks come after it).
+        tamias_begin_step(&self._space)
         try:
-            with nogil:
-                cpSpaceStep(&self._space, cdt)
-                bad = _firstNonFiniteBody(self._space.dynamicBodies)
+            if cpSpaceIsLocked(&self._space) or self._locked:
+                raise SpaceLocked("step() cannot be called from inside a step or a query")
+            self._check_bodies()
+            if self._space.constraints.num:
+                tamias_check_constraints(&self._space)
+            self._locked = True
+            try:
+                with nogil:
+                    cpSpaceStep(&self._space, cdt)
+                    bad = _firstNonFiniteBody(self._space.dynamicBodies)
+            finally:
+                self._locked = False
         finally:
-            self._locked = False
+            tamias_end_step(&self._space)
         try:
             self._check_c_errors()
             if bad != NULL:
@@ -1435,6 +1464,7 @@ cdef class Space:
             raise IllegalCollisionType(
                 "collision_type_a can not be None if collision_type_b is not None. "
                 "Please swap them.")
+        tamias_wait_for_step(&self._space)
         key = (collision_type_a, collision_type_b)
         if key not in self._handlers:
             ta = CP_WILDCARD_COLLISION_TYPE if collision_type_a is None else collision_type_a
@@ -1506,6 +1536,7 @@ cdef class Space:
         hits.count = hits.capacity = 0
         hits.failed = 0
         try:
+            tamias_wait_for_step(&self._space)
             cpSpacePointQuery(&self._space, p, d, f, &hits)
             if hits.failed:
                 cpTakeOutOfMemory()
@@ -1530,7 +1561,9 @@ cdef class Space:
         cdef cpFloat d = max_distance
         cdef cpShapeFilter f = _filter_from_object(shape_filter)
         cdef cpPointQueryInfo info
-        cdef cpShape *shape = cpSpacePointQueryNearest(&self._space, p, d, f, &info)
+        cdef cpShape *shape
+        tamias_wait_for_step(&self._space)
+        shape = cpSpacePointQueryNearest(&self._space, p, d, f, &info)
         if shape == NULL:
             return None
         return PointQueryInfo(<object>shape.userData, vec2d_from_cpv(info.point), info.distance,
@@ -1557,6 +1590,7 @@ cdef class Space:
         hits.count = hits.capacity = 0
         hits.failed = 0
         try:
+            tamias_wait_for_step(&self._space)
             cpSpaceSegmentQuery(&self._space, a, b, r, f, &hits)
             if hits.failed:
                 cpTakeOutOfMemory()
@@ -1582,7 +1616,9 @@ cdef class Space:
         cdef cpFloat r = radius
         cdef cpShapeFilter f = _filter_from_object(shape_filter)
         cdef cpSegmentQueryInfo info
-        cdef cpShape *shape = cpSpaceSegmentQueryFirst(&self._space, a, b, r, f, &info)
+        cdef cpShape *shape
+        tamias_wait_for_step(&self._space)
+        shape = cpSpaceSegmentQueryFirst(&self._space, a, b, r, f, &info)
         if shape == NULL:
             return None
         return SegmentQueryInfo(<object>shape.userData, vec2d_from_cpv(info.point),
@@ -1606,6 +1642,7 @@ cdef class Space:
         hits.count = hits.capacity = 0
         hits.failed = 0
         try:
+            tamias_wait_for_step(&self._space)
             cpSpaceBBQuery(&self._space, cbb, f, &hits)
             if hits.failed:
                 cpTakeOutOfMemory()
@@ -1638,6 +1675,7 @@ cdef class Space:
         hits.failed = 0
         hits.anyCollision = 0
         try:
+            tamias_wait_for_step(&self._space)
             cpSpaceShapeQuery(&self._space, sh._shape, &hits)
             collision_check_flags()
             if hits.failed:
@@ -1693,9 +1731,13 @@ cdef class Space:
         if flags & 1:
             # Shapes in cpSpaceEachShape order: dynamic tree, then static tree.
             shapes = []
+            tamias_wait_for_step(&self._space)
             cpSpaceEachShape(&self._space, _collectShape, <void *>shapes)
             for obj in shapes:
                 sh = <Shape>obj
+                # The draw calls are Python: another thread may have started
+                # a step meanwhile.
+                tamias_wait_for_step(&self._space)
                 shape = sh._shape
                 if shape.space != &self._space:
                     continue  # removed by an earlier draw call
@@ -1734,6 +1776,7 @@ cdef class Space:
 
         if flags & 2:
             # cpSpaceEachConstraint order: the space's constraint array.
+            tamias_wait_for_step(&self._space)
             carr = self._space.constraints
             constraints = []
             for i in range(carr.num):
@@ -1741,6 +1784,7 @@ cdef class Space:
             color = options.constraint_color
             for obj in constraints:
                 con = <Constraint>obj
+                tamias_wait_for_step(&self._space)
                 if con._constraint.space != &self._space:
                     continue  # removed by an earlier draw call
                 tamias_constraint_debug_draw(con._constraint, t, options, color)
@@ -1748,6 +1792,7 @@ cdef class Space:
         if flags & 4:
             color = options.collision_point_color
             segments = []
+            tamias_wait_for_step(&self._space)
             arbiters = self._space.arbiters
             for i in range(arbiters.num):
                 arb = <cpArbiter *>arbiters.arr[i]
@@ -1776,6 +1821,7 @@ cdef class Space:
         >>> sorted(tamias2d.Space().__getstate__())
         ['custom', 'general', 'init', 'special']
         """
+        tamias_wait_for_step(&self._space)
         return _snapshot().space_getstate(self)
 
     def __setstate__(self, state):
@@ -1789,12 +1835,14 @@ cdef class Space:
         >>> t.iterations
         3
         """
+        tamias_wait_for_step(&self._space)
         _snapshot().space_setstate(self, state)
 
     def __reduce__(self):
         return (copyreg.__newobj__, (type(self),), self.__getstate__())
 
     def __deepcopy__(self, memo):
+        tamias_wait_for_step(&self._space)
         return _snapshot().space_deepcopy(self, memo)
 
     def copy(self):
@@ -1812,6 +1860,7 @@ cdef class Space:
         >>> next(iter(t.bodies)).position == b.position
         True
         """
+        tamias_wait_for_step(&self._space)
         return _snapshot().space_deepcopy(self, {})
 
     def _contact_graph_problem(self):
