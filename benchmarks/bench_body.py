@@ -10,11 +10,17 @@ Cases, each over N bodies (1,000 by default):
   * create+shape  ``Body(1, 10)`` plus ``Circle(body, 1)`` N times (when the
                shape module is built).
 
+With ``--in-space`` the bodies (with a circle each) are in a space, the case
+that pays the thread guard's check (src/tamias2d/_threadguard.pxd: a thread
+that touches a body while another thread steps its space waits for the
+step); run it against two builds to see that check's cost.
+
 Every case is timed ``--repeat`` times (each a ``--number``-loop); the median
 per-loop time of each engine and the ratio tamias2d/pymunk are printed.
 Lower is better; a ratio of 0.5 means tamias2d takes half of pymunk's time.
 
     PYTHONPATH=src:. python benchmarks/bench_body.py [--bodies N] [--repeat R] [--number K]
+        [--in-space]
 """
 import argparse
 import statistics
@@ -24,14 +30,22 @@ import pymunk
 import tamias2d
 
 
-def make_bodies(mod, n):
+def make_bodies(mod, n, in_space=False):
     bodies = []
+    space = mod.Space() if in_space else None
     for i in range(n):
         b = mod.Body(1, 10)
         b.position = (i * 0.5, -i * 0.25)
         b.angle = i * 0.001
+        if space is not None:
+            space.add(b, mod.Circle(b, 0.1))
         bodies.append(b)
+    if space is not None:
+        _spaces.append(space)   # the spaces live as long as the run
     return bodies
+
+
+_spaces = []
 
 
 def case_read(bodies):
@@ -105,11 +119,13 @@ def main(argv=None):
     parser.add_argument("--bodies", type=int, default=1000)
     parser.add_argument("--repeat", type=int, default=15)
     parser.add_argument("--number", type=int, default=20)
+    parser.add_argument("--in-space", action="store_true",
+                        help="put the bodies (with a circle each) in a space")
     args = parser.parse_args(argv)
     n = args.bodies
 
     engines = {"tamias2d": tamias2d, "pymunk": pymunk}
-    bodies = {name: make_bodies(mod, n) for name, mod in engines.items()}
+    bodies = {name: make_bodies(mod, n, args.in_space) for name, mod in engines.items()}
     cases = [
         ("read (pos.x+pos.y+angle)", lambda mod: case_read),
         ("read position only", lambda mod: case_read_vec),
@@ -125,7 +141,8 @@ def main(argv=None):
     # Same results first, so the timing compares equal work.
     assert case_read(bodies["tamias2d"]) == case_read(bodies["pymunk"])
 
-    print("%d bodies, median of %d repeats x %d loops" % (n, args.repeat, args.number))
+    print("%d bodies%s, median of %d repeats x %d loops" % (n, " in a space" if args.in_space else "",
+                                                   args.repeat, args.number))
     print("%-28s %14s %14s %8s" % ("case", "tamias2d us", "pymunk us", "ratio"))
     for label, make in cases:
         result = {}
