@@ -1,8 +1,10 @@
 """tamias2d: a 2D rigid-body physics engine, a Cython port of Chipmunk2D.
 
 It follows Munk2D (the Chipmunk2D fork inside pymunk 7.3) closely enough that
-the same scene gives the same numbers, and offers pymunk's Python API, so
-``import tamias2d as pymunk`` runs a pymunk game script unchanged.
+the same scene gives the same numbers, and offers pymunk's Python API. To run
+a pymunk program unchanged, call ``tamias2d.install_as_pymunk()`` before it
+imports pymunk (then ``import pymunk`` and ``import pymunk.pygame_util`` give
+tamias2d), or start it with ``tamias2d run program.py``.
 """
 version = "0.1.0"
 # The Chipmunk the port follows: Munk2D 2.0.1 as pymunk 7.3 compiles it.
@@ -22,3 +24,4 @@ from . import batch
 from . import constraints
 from .constraints import (Constraint, PinJoint, SlideJoint, PivotJoint, GrooveJoint,
     DampedSpring, DampedRotarySpring, RotaryLimitJoint, RatchetJoint, GearJoint, SimpleMotor)
+from ._pymunk_hook import install_as_pymunk

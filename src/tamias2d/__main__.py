@@ -4,6 +4,8 @@ Commands:
 
 - ``demo``: build a scene, step it headless, print a summary and draw the
   result to a PNG (and optionally an animated GIF);
+- ``run SCRIPT [ARGS...]``: run an unmodified pymunk program on tamias2d
+  (``import pymunk`` in it gives tamias2d; see ``tamias2d.install_as_pymunk``);
 - ``version``: print the version of tamias2d and of the Chipmunk it follows.
 
 >>> main(["version"])  # doctest: +ELLIPSIS
@@ -110,6 +112,14 @@ def build_parser():
                            "tamias2d copies, gives a comparison (default: tamias2d)")
     demo.add_argument("--quiet", "-q", action="store_true",
                       help="no progress display and no summary")
+
+    run = sub.add_parser(
+        "run", help="run a pymunk program on tamias2d",
+        description="Run SCRIPT as __main__ with `import pymunk` giving tamias2d "
+                    "(tamias2d.install_as_pymunk()); ARGS become its sys.argv[1:].")
+    run.add_argument("script", metavar="SCRIPT", help="the pymunk program (a .py file)")
+    run.add_argument("script_args", metavar="ARGS", nargs=argparse.REMAINDER,
+                     help="arguments passed to the program")
 
     sub.add_parser("version", help="print the version of tamias2d and of the Chipmunk it follows",
                    description="Print the version of tamias2d and of the Chipmunk it follows.")
@@ -250,6 +260,19 @@ def main(argv=None):
         return 0
     if args.command == "demo":
         return run_demo(args)
+    if args.command == "run":
+        from tamias2d._pymunk_hook import run_script
+        if not os.path.isfile(args.script):
+            parser.error(f"no such script: {args.script}")
+        try:
+            run_script(args.script, args.script_args)
+        except SystemExit as exc:  # the program's own exit status
+            code = exc.code
+            if code is None or isinstance(code, int):
+                return code or 0
+            print(code, file=sys.stderr)
+            return 1
+        return 0
     parser.print_help()
     return 0
 
