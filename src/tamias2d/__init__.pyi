@@ -42,3 +42,5 @@ from .vector import Vec2d as Vec2d
 
 version: str
 chipmunk_version: str
+
+def install_as_pymunk() -> None: ...
