@@ -25,3 +25,4 @@ from . import constraints
 from .constraints import (Constraint, PinJoint, SlideJoint, PivotJoint, GrooveJoint,
     DampedSpring, DampedRotarySpring, RotaryLimitJoint, RatchetJoint, GearJoint, SimpleMotor)
 from ._pymunk_hook import install_as_pymunk
+from ._step_spaces import step_spaces

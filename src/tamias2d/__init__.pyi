@@ -44,3 +44,7 @@ version: str
 chipmunk_version: str
 
 def install_as_pymunk() -> None: ...
+
+from collections.abc import Iterable as _Iterable
+def step_spaces(spaces: _Iterable[Space], dt: float, *, threads: int | None = None,
+                steps: int = 1) -> None: ...

@@ -48,6 +48,10 @@ cdef void cpSpaceEachShape(cpSpace *space, cpSpatialIndexIteratorFunc func, void
 # `filter` when it is not NULL, calling their separate callbacks).
 cdef void cpSpaceFilterArbiters(cpSpace *space, cpBody *body, cpShape *filter) noexcept nogil
 
+# The C part of Space.step (the solver's step and the overflow check); returns
+# the first body the step made non-finite, or NULL.
+cdef cpBody *tamias_space_step(cpSpace *space, cpFloat dt) noexcept nogil
+
 # The step, the contact graph and sleeping: _space_step.pxd. Queries: _space_query.pxd.
 
 # -- Python ------------------------------------------------------------------------------
@@ -80,4 +84,7 @@ cdef class Space:
     cdef _remove_shape(self, Shape shape)
     cdef _remove_body(self, Body body)
     cdef _after_step(self)
+    cdef int _step_begin(self) except -1
+    cdef void _step_abort(self) noexcept
+    cdef int _step_finish(self, cpBody *bad, double dt) except -1
     cdef _debug_draw(self, options)

@@ -476,6 +476,13 @@ cdef void _collectShape(void *obj, void *data) noexcept with gil:
 
 
 
+# The C part of Space.step: the solver's step, then the first body it made
+# non-finite (NULL if none). Runs without the GIL.
+cdef cpBody *tamias_space_step(cpSpace *space, cpFloat dt) noexcept nogil:
+    cpSpaceStep(space, dt)
+    return _firstNonFiniteBody(space.dynamicBodies)
+
+
 # ================================================================================================
 # Python
 # ================================================================================================
@@ -1378,6 +1385,17 @@ cdef class Space:
             # pymunk takes a negative dt and integrates backwards, with the
             # damping as pow(damping, dt): inf for a damping of 0.
             raise ValueError(f"dt must be a finite number >= 0, not {dt!r}")
+        self._step_begin()
+        with nogil:
+            bad = tamias_space_step(&self._space, cdt)
+        self._step_finish(bad, cdt)
+
+    # Space.step in three parts, so that tamias2d.step_spaces can run the
+    # middle one for many spaces on many threads: _step_begin (with the GIL:
+    # checks, the space marked as stepping in this thread), the C step
+    # (tamias_space_step, without the GIL) and _step_finish (with the GIL:
+    # errors, deferred adds and removes, post-step callbacks).
+    cdef int _step_begin(self) except -1:
         # Another thread stepping this space: wait for its step to end.
         tamias_wait_for_step(&self._space)
         if cpSpaceIsLocked(&self._space) or self._locked:
@@ -1391,22 +1409,28 @@ cdef class Space:
             self._check_bodies()
             if self._space.constraints.num:
                 tamias_check_constraints(&self._space)
-            self._locked = True
-            try:
-                with nogil:
-                    cpSpaceStep(&self._space, cdt)
-                    bad = _firstNonFiniteBody(self._space.dynamicBodies)
-            finally:
-                self._locked = False
-        finally:
+        except BaseException:
             tamias_end_step(&self._space)
+            raise
+        self._locked = True
+        return 0
+
+    # Undoes _step_begin when the C step is not run after all.
+    cdef void _step_abort(self) noexcept:
+        self._locked = False
+        tamias_end_step(&self._space)
+
+    cdef int _step_finish(self, cpBody *bad, double dt) except -1:
+        self._locked = False
+        tamias_end_step(&self._space)
         try:
             self._check_c_errors()
             if bad != NULL:
                 self._overflowed = True
-                self._raise_non_finite(bad, cdt)
+                self._raise_non_finite(bad, dt)
         finally:
             self._after_step()
+        return 0
 
     cdef _after_step(self):
         cdef list later
