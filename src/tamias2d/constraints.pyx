@@ -32,7 +32,7 @@ import copyreg
 import weakref
 
 from tamias2d._config cimport cpFloat, cpBool, TAMIAS_FLOAT_0_9F
-from tamias2d._structs cimport (cpBody, cpSpace, cpArray, cpConstraint, cpConstraintClass,
+from tamias2d._structs cimport (cpBody, cpShape, cpSpace, cpArray, cpConstraint, cpConstraintClass,
     CP_BODY_TYPE_DYNAMIC, CP_BODY_TYPE_KINEMATIC, CP_BODY_TYPE_STATIC)
 from tamias2d._containers cimport cpArrayDeleteObj
 from tamias2d.vector cimport (cpVect, cpMat2x2, cpTransform, cpv, cpvzero, cpveql, cpvadd,
@@ -854,6 +854,61 @@ cdef int tamias_check_constraints(cpSpace *space) except -1:
     raise UnsolvableCollision(
         f"Unsolvable constraint: {obj!r} joins two bodies that cannot rotate "
         f"(both have an infinite moment of inertia or are not dynamic).")
+
+
+# -- joints across spaces ----------------------------------------------------------------------------
+# Munk2D links a joint into both bodies' constraint lists whatever space the
+# bodies are in. A body of another space then drags the joint into that
+# space's sleeping components and, when they wake, into its constraint
+# array, a joint that space never had (and keeps reading after it is freed).
+# So a joint and its bodies share one space (or the bodies are in none).
+
+cdef cpSpace *_space_of_body(cpBody *body) noexcept nogil:
+    # The space a body belongs to; for a body removed from its space whose
+    # shapes stayed there, that space (sleeping would move those shapes).
+    cdef cpShape *shape
+    if body.space != NULL:
+        return body.space
+    shape = body.shapeList
+    while shape != NULL:
+        if shape.space != NULL:
+            return shape.space
+        shape = shape.next
+    return NULL
+
+cdef object _space_name(cpSpace *space):
+    if space != NULL and space.userData != NULL:
+        return repr(<object>space.userData)
+    return "another space"
+
+cdef int tamias_check_joint_space(cpSpace *space, cpConstraint *c) except -1:
+    cdef cpBody *body
+    cdef cpSpace *other
+    cdef int i
+    for i in range(2):
+        body = c.a if i == 0 else c.b
+        other = _space_of_body(body)
+        if other != NULL and other != space:
+            obj = <object>c.userData if c.userData != NULL else None
+            b = <object>body.userData if body.userData != NULL else None
+            raise IllegalConstraint(
+                f"{obj!r} joins {b!r} (body {'a' if i == 0 else 'b'}), which belongs to "
+                f"{_space_name(other)}: a joint and its bodies must be in the same space "
+                f"(or the bodies in none). Remove the body from that space first.")
+    return 0
+
+cdef int tamias_check_body_joints(cpSpace *space, cpBody *body) except -1:
+    # The body's list holds the joints that are in some space.
+    cdef cpConstraint *c = body.constraintList
+    while c != NULL:
+        if c.space != NULL and c.space != space:
+            obj = <object>c.userData if c.userData != NULL else None
+            b = <object>body.userData if body.userData != NULL else None
+            raise IllegalConstraint(
+                f"{b!r} has a joint, {obj!r}, in {_space_name(c.space)}: a body and its "
+                f"joints must be in the same space. Remove the joint from that space first.")
+        c = _constraint_next(c, body)
+    return 0
 
 
 # -- debug drawing (cpSpaceDebug.c) -------------------------------------------------------------------------------

@@ -63,7 +63,7 @@ from tamias2d.arbiter cimport (Arbiter, arbiter_wrap, cpArbiterInit, cpArbiterUp
 from tamias2d.body cimport cpBodyRemoveConstraint
 from tamias2d.constraints cimport (Constraint, tamias_constraint_detach,
     tamias_space_detach_constraints, tamias_check_constraints, tamias_constraint_debug_draw,
-    tamias_constraint_clear_impulse)
+    tamias_constraint_clear_impulse, tamias_check_joint_space, tamias_check_body_joints)
 
 from tamias2d.shape import PointQueryInfo, SegmentQueryInfo, ShapeQueryInfo
 from tamias2d.errors import (IllegalBody, IllegalShape, SpaceLocked, AlreadyInSpace,
@@ -1597,6 +1597,7 @@ cdef _add_constraint(Space space, Constraint constraint):
     if (cpBodyGetType(c.a) != CP_BODY_TYPE_DYNAMIC
             and cpBodyGetType(c.b) != CP_BODY_TYPE_DYNAMIC):
         raise IllegalBody("At least one of a constraint's bodies must be DYNAMIC.")
+    tamias_check_joint_space(&space._space, c)
     if cpSpaceIsLocked(&space._space):
         raise SpaceLocked("the space is locked (a query or debug draw is running)")
     space._constraints[constraint] = None
@@ -2024,6 +2025,7 @@ cdef class Space:
             if shape.space is not None and shape.space is not self:
                 raise AlreadyInSpace("The body's shapes are in another space: remove them "
                                      "from it before adding the body to this space.")
+        tamias_check_body_joints(&self._space, &body._body)
         body._space = weakref.ref(self)
         if cpSpaceAddBody(&self._space, &body._body) == NULL:
             body._space = None
