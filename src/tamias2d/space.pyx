@@ -1411,6 +1411,38 @@ def empty_callback(*args, **kwargs):
     return None
 
 
+def bisection_order(objs):
+    """The items of ``objs`` in bisection order: the middle one, then the
+    middles of both halves, and so on, breadth first.
+
+    The order :meth:`Space.add_static_bulk` adds shapes in. The bounding-box
+    tree (Munk2D's, and so pymunk's) inserts each shape where its cost
+    heuristic says; shapes added in spatial order (a row of segments, a
+    grid) each go to the bottom of one ever longer branch, so adding n of
+    them takes O(n^2) time. In bisection order the tree stays about
+    2 log2(n) deep. ``pymunk_space.add(*bisection_order(shapes))`` builds
+    the same tree in pymunk, so a scene made this way still steps bit for
+    bit as in pymunk.
+
+    >>> from tamias2d.space import bisection_order
+    >>> bisection_order(range(7))
+    [3, 1, 5, 0, 2, 4, 6]
+    """
+    items = list(objs)
+    order = []
+    ranges = [(0, len(items))]
+    i = 0
+    while i < len(ranges):
+        lo, hi = ranges[i]
+        i += 1
+        if lo < hi:
+            mid = (lo + hi) // 2
+            order.append(items[mid])
+            ranges.append((lo, mid))
+            ranges.append((mid + 1, hi))
+    return order
+
+
 cdef enum:
     _BEGIN = 0
     _PRE_SOLVE = 1
@@ -2013,6 +2045,28 @@ cdef class Space:
                 self._add_shape(<Shape>o)
             elif isinstance(o, Constraint):
                 _add_constraint(self, <Constraint>o)
+
+    def add_static_bulk(self, *objs):
+        """Add many shapes (typically static: terrain, walls, a level) fast.
+
+        The same as ``add(*bisection_order(objs))``: see
+        :func:`bisection_order`. Adding 100,000 segments laid in a row with
+        :meth:`add` takes minutes (in pymunk too), since the bounding-box
+        tree degenerates into one long branch; this takes a fraction of a
+        second. The shapes get their ids in the order they are added, so
+        the scene is the one pymunk builds from
+        ``space.add(*bisection_order(objs))``, and it steps bit for bit
+        like it; it is not the scene ``add(*objs)`` builds (the order of
+        query results and of collision pairs with these shapes differs).
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> row = [tamias2d.Segment(s.static_body, (i, 0), (i + 1, 0), 0.5) for i in range(1000)]
+        >>> s.add_static_bulk(*row)
+        >>> len(s.shapes)
+        1000
+        """
+        self.add(*bisection_order(objs))
 
     cdef _add_body(self, Body body):
         if body in self._bodies:
