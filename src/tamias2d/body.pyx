@@ -2,7 +2,6 @@
 # body half of cpSpaceComponent.c, then the Python Body with pymunk 7.3's API.
 # Arithmetic keeps the C association exactly, so results match pymunk bit for
 # bit; see munk2d-inventory.md, group 4.
-import copyreg
 import weakref
 
 from tamias2d._weakkeysview import WeakKeysView
@@ -13,6 +12,7 @@ from libc.stdint cimport uintptr_t
 from libc.string cimport memset
 
 from tamias2d._config cimport cpFloat, cpBool
+from tamias2d._pickle cimport PickleMixin, snapshot_module as _snapshot
 from tamias2d._structs cimport (cpBody, cpShape, cpSpace, cpArbiter, cpBodyType,
     cpConstraint, cpArbiterThread, cpShapeMassInfo,
     CP_BODY_TYPE_DYNAMIC, CP_BODY_TYPE_KINEMATIC, CP_BODY_TYPE_STATIC)
@@ -501,16 +501,6 @@ cdef int _body_type_from_object(object body_type) except -1:
 
 
 cdef object _arbiter_factory = None
-cdef object _snapshot_module = None
-
-cdef object _snapshot():
-    # Lazy upward import: copy and pickle live above the space.
-    global _snapshot_module
-    if _snapshot_module is None:
-        from tamias2d import _snapshot as module
-        _snapshot_module = module
-    return _snapshot_module
-
 cdef object _get_arbiter_factory():
     # Lazy upward import: the space module sits above this one.
     global _arbiter_factory
@@ -1242,27 +1232,18 @@ cdef class Body:
                 arb.swapped = swapped
             arb = next_arb
 
-    # -- copy and pickle -------------------------------------------------------------------
-    def __getstate__(self):
-        """The body's state as pymunk lays it out (used by copy and pickle).
+    # -- copy and pickle (pymunk's layout: tamias2d._pickle.PickleMixin) ------------------
+    def _pickle_extra_state(self, dict state):
+        state["special"].append(("is_sleeping", self.is_sleeping))
+        state["special"].append(("_velocity_func", self._velocity_func))
+        state["special"].append(("_position_func", self._position_func))
 
-        >>> import tamias2d
-        >>> sorted(tamias2d.Body(1, 2).__getstate__())
-        ['custom', 'general', 'init', 'special']
-        """
-        cls = type(self)
-        d = {"init": [], "general": [], "custom": [], "special": []}
-        for a in cls._pickle_attrs_init:
-            d["init"].append((a, getattr(self, a)))
-        for a in cls._pickle_attrs_general:
-            d["general"].append((a, getattr(self, a)))
-        for k, v in _user_dict(self).items():
-            if k[0] != "_":
-                d["custom"].append((k, v))
-        d["special"].append(("is_sleeping", self.is_sleeping))
-        d["special"].append(("_velocity_func", self._velocity_func))
-        d["special"].append(("_position_func", self._position_func))
-        return d
+    def _pickle_restore_special(self, str name, value):
+        # A sleeping body comes back awake.
+        if name == "_velocity_func" and value is not None:
+            self.velocity_func = value
+        elif name == "_position_func" and value is not None:
+            self.position_func = value
 
     def __setstate__(self, state):
         """Restore a state made by :meth:`__getstate__` (used by unpickling).
@@ -1277,20 +1258,7 @@ cdef class Body:
             # The compact state of __reduce_ex__ (see tamias2d._snapshot).
             _snapshot().body_setstate(self, state)
             return
-        self.__init__(*[v for k, v in state["init"]])
-        for k, v in state["general"]:
-            setattr(self, k, v)
-        for k, v in state["custom"]:
-            setattr(self, k, v)
-        for k, v in state["special"]:
-            # A sleeping body comes back awake.
-            if k == "_velocity_func" and v is not None:
-                self.velocity_func = v
-            elif k == "_position_func" and v is not None:
-                self.position_func = v
-
-    def __reduce__(self):
-        return (copyreg.__newobj__, (type(self),), self.__getstate__())
+        PickleMixin.__setstate__(self, state)
 
     def __reduce_ex__(self, protocol):
         """What copy and pickle use: the C struct as bytes, the user
@@ -1306,19 +1274,6 @@ cdef class Body:
         True
         """
         return _snapshot().body_reduce(self)
-
-    def copy(self):
-        """A deep copy of the body (without its shapes, constraints or space).
-
-        >>> import tamias2d
-        >>> b = tamias2d.Body(1, 2)
-        >>> b.position = 5, 6
-        >>> c = b.copy()
-        >>> c.position, c is b
-        (Vec2d(5.0, 6.0), False)
-        """
-        import copy as _copy
-        return _copy.deepcopy(self)
 
 
 # The C defaults behind Body.update_velocity / Body.update_position, for the

@@ -28,7 +28,6 @@ from libc.string cimport memset
 from libc.stdint cimport uintptr_t
 from cpython.ref cimport PyObject, Py_INCREF
 
-import copyreg
 import weakref
 
 from tamias2d._config cimport cpFloat, cpBool, TAMIAS_FLOAT_0_9F
@@ -1450,65 +1449,16 @@ cdef class Constraint:
         self._post_solve_func = func
         _install_solve_funcs(self)
 
-    # -- copy and pickle ---------------------------------------------------------------------------
-    def __getstate__(self):
-        """The constraint's state as pymunk lays it out (used by copy and
-        pickle): constructor arguments, common properties, user attributes
-        and the callbacks.
+    # -- copy and pickle (pymunk's layout: tamias2d._pickle.PickleMixin) ---------------------------
+    def _pickle_extra_state(self, dict state):
+        state["special"].append(("_pre_solve_func", self._pre_solve_func))
+        state["special"].append(("_post_solve_func", self._post_solve_func))
 
-        >>> import tamias2d
-        >>> j = tamias2d.SimpleMotor(tamias2d.Body(1, 1), tamias2d.Body(1, 1), 2)
-        >>> [k for k, v in j.__getstate__()["init"]]
-        ['a', 'b', 'rate']
-        """
-        cls = type(self)
-        d = {"init": [], "general": [], "custom": [], "special": []}
-        for a in cls._pickle_attrs_init:
-            d["init"].append((a, getattr(self, a)))
-        for a in cls._pickle_attrs_general:
-            d["general"].append((a, getattr(self, a)))
-        for k, v in getattr(self, "__dict__").items():
-            if k[0] != "_":
-                d["custom"].append((k, v))
-        d["special"].append(("_pre_solve_func", self._pre_solve_func))
-        d["special"].append(("_post_solve_func", self._post_solve_func))
-        return d
-
-    def __setstate__(self, state):
-        """Restore a state made by :meth:`__getstate__` (used by unpickling).
-
-        >>> import tamias2d
-        >>> a, b = tamias2d.Body(1, 1), tamias2d.Body(1, 1)
-        >>> j = tamias2d.SimpleMotor(a, b, 2)
-        >>> j.__setstate__(tamias2d.SimpleMotor(a, b, 5).__getstate__())
-        >>> j.rate
-        5.0
-        """
-        self.__init__(*[v for k, v in state["init"]])
-        for k, v in state["general"]:
-            setattr(self, k, v)
-        for k, v in state["custom"]:
-            setattr(self, k, v)
-        for k, v in state["special"]:
-            if k == "_pre_solve_func" and v is not None:
-                self.pre_solve = v
-            elif k == "_post_solve_func" and v is not None:
-                self.post_solve = v
-
-    def __reduce__(self):
-        return (copyreg.__newobj__, (type(self),), self.__getstate__())
-
-    def copy(self):
-        """A deep copy of the constraint (its bodies are copied too).
-
-        >>> import tamias2d
-        >>> j = tamias2d.SimpleMotor(tamias2d.Body(1, 1), tamias2d.Body(1, 1), 2)
-        >>> j2 = j.copy()
-        >>> j2.rate, j2.a is j.a
-        (2.0, False)
-        """
-        import copy as _copy
-        return _copy.deepcopy(self)
+    def _pickle_restore_special(self, str name, value):
+        if name == "_pre_solve_func" and value is not None:
+            self.pre_solve = value
+        elif name == "_post_solve_func" and value is not None:
+            self.post_solve = value
 
 
 cdef class PinJoint(Constraint):

@@ -9,8 +9,6 @@ every number matches pymunk 7.3. The Python half is pymunk's shape API.
 >>> c.area
 12.566370614359172
 """
-import copy as _copy
-import copyreg as _copyreg
 import weakref as _weakref
 from typing import NamedTuple
 
@@ -33,6 +31,7 @@ from tamias2d.vector cimport (cpVect, cpBB, cpTransform, cpv, cpvadd, cpvsub, cp
     vec2d_from_cpv, cpv_from_object, cpv_from_object_finite, bb_from_cpbb,
     cpbb_from_object, cptransform_from_object)
 from tamias2d.body cimport Body, cpBodyActivate, cpBodyAccumulateMassFromShapes
+from tamias2d._pickle cimport PickleMixin, snapshot_module as _snapshot
 
 from tamias2d.errors import IllegalShape, IllegalBody, IndexOutOfBounds, AlreadyInSpace
 
@@ -1052,17 +1051,6 @@ cdef int _check_transform_finite(const cpTransform *t) except -1:
     return 0
 
 
-cdef object _snapshot_module = None
-
-cdef object _snapshot():
-    # Lazy upward import: copy and pickle live above the space.
-    global _snapshot_module
-    if _snapshot_module is None:
-        from tamias2d import _snapshot as module
-        _snapshot_module = module
-    return _snapshot_module
-
-
 cdef object _shape_from_ptr(const cpShape *shape):
     if shape == NULL or shape.userData == NULL:
         return None
@@ -1424,29 +1412,15 @@ cdef class Shape:
     def _hashid(self, v):
         self._shape.hashid = <cpHashValue>v
 
-    def __getstate__(self):
-        """The state used by copy and pickle, in pymunk's layout.
-
-        >>> import tamias2d
-        >>> sorted(tamias2d.Circle(None, 1).__getstate__())
-        ['custom', 'general', 'init', 'special']
-        """
-        d = {"init": [], "general": [], "custom": [], "special": []}
-        for a in type(self)._pickle_attrs_init:
-            d["init"].append((a, getattr(self, a)))
-        for a in type(self)._pickle_attrs_general:
-            d["general"].append((a, getattr(self, a)))
-        for k, v in vars(self).items():
-            if k[0] != "_":
-                d["custom"].append((k, v))
+    def _pickle_extra_state(self, dict state):
+        # pymunk stores the mass or density after the user attributes; an
+        # infinite density (mass on a zero-area shape) it also stores would
+        # turn the mass into NaN when restored, so it is left out.
         if self.mass > 0:
-            d["general"].append(("mass", self.mass))
+            state["general"].append(("mass", self.mass))
         density = self.density
-        # pymunk also stores an infinite density (mass on a zero-area
-        # shape), which would turn the mass into NaN when restored.
         if density > 0 and density < INFINITY:
-            d["general"].append(("density", density))
-        return d
+            state["general"].append(("density", density))
 
     def __setstate__(self, state):
         """Restore a state made by :meth:`__getstate__`.
@@ -1462,15 +1436,7 @@ cdef class Shape:
             # The compact state of __reduce_ex__ (see tamias2d._snapshot).
             _snapshot().shape_setstate(self, state)
             return
-        init_args = [v for k, v in state["init"]]
-        self.__init__(*init_args)
-        for k, v in state["general"]:
-            setattr(self, k, v)
-        for k, v in state["custom"]:
-            setattr(self, k, v)
-
-    def __reduce__(self):
-        return (_copyreg.__newobj__, (type(self),), self.__getstate__())
+        PickleMixin.__setstate__(self, state)
 
     def __reduce_ex__(self, protocol):
         """What copy and pickle use: the kind, the body, the C struct as bytes
@@ -1485,16 +1451,6 @@ cdef class Shape:
         0.3
         """
         return _snapshot().shape_reduce(self)
-
-    def copy(self):
-        """A deep copy of the shape (and of its body).
-
-        >>> import tamias2d
-        >>> c = tamias2d.Circle(None, 3, (1, 2))
-        >>> c.copy().offset
-        Vec2d(1.0, 2.0)
-        """
-        return _copy.deepcopy(self)
 
 
 # -- Circle ----------------------------------------------------------------------------------

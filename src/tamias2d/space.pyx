@@ -61,6 +61,7 @@ from tamias2d.arbiter cimport (Arbiter, arbiter_wrap, cpArbiterInit, cpArbiterUp
     cpArbiterUnthread, cpCollisionHandlerDoNothing, cpCollisionDoNothing,
     cpArbiterThreadForBody, cpArbiterNext)
 from tamias2d.body cimport cpBodyRemoveConstraint
+from tamias2d._pickle cimport snapshot_module as _snapshot
 from tamias2d.constraints cimport (Constraint, tamias_constraint_detach,
     tamias_space_detach_constraints, tamias_check_constraints, tamias_constraint_debug_draw,
     tamias_constraint_clear_impulse, tamias_check_joint_space, tamias_check_body_joints)
@@ -1553,17 +1554,6 @@ cdef void _pyPostSolve(cpArbiter *arb, cpSpace *space, void *data) noexcept nogi
 
 cdef void _pySeparate(cpArbiter *arb, cpSpace *space, void *data) noexcept nogil:
     _callPyHandler(arb, space, data, _SEPARATE)
-
-
-cdef object _snapshot_module = None
-
-cdef object _snapshot():
-    # Copy and pickle live in tamias2d._snapshot, which cimports this module.
-    global _snapshot_module
-    if _snapshot_module is None:
-        from tamias2d import _snapshot as module
-        _snapshot_module = module
-    return _snapshot_module
 
 
 def _arbiter_for_body(arb_ptr, space):
