@@ -3,14 +3,13 @@
 # change it only together with them.
 from libc.math cimport INFINITY
 from tamias2d._config cimport cpFloat, cpBool
-from tamias2d._pickle cimport PickleMixin
 from tamias2d._structs cimport (cpBody, cpShape, cpSpace, cpArbiter, cpBodyType,
     cpConstraint, cpBodyVelocityFunc, cpBodyPositionFunc,
     CP_BODY_TYPE_DYNAMIC, CP_BODY_TYPE_KINEMATIC, CP_BODY_TYPE_STATIC)
 from tamias2d.vector cimport (cpVect, cpTransform, cpv, cpvadd, cpvsub, cpvmult,
     cpvperp, cpvdot, cpTransformPoint, cpTransformVect, cpTransformRigidInverse)
 
-cdef class Body(PickleMixin):
+cdef class Body:
     cdef cpBody _body            # the C body, embedded; C code uses &self._body
     cdef object _space           # weakref.ref to the Space holding it, or None
     cdef dict _shapes            # Shape -> None, the shapes attached (insertion order)

@@ -12,7 +12,8 @@ from libc.stdint cimport uintptr_t
 from libc.string cimport memset
 
 from tamias2d._config cimport cpFloat, cpBool
-from tamias2d._pickle cimport PickleMixin, snapshot_module as _snapshot
+from tamias2d._pickle cimport (snapshot_module as _snapshot, pymunk_getstate, pymunk_setstate,
+    pymunk_reduce, deep_copy)
 from tamias2d._structs cimport (cpBody, cpShape, cpSpace, cpArbiter, cpBodyType,
     cpConstraint, cpArbiterThread, cpShapeMassInfo,
     CP_BODY_TYPE_DYNAMIC, CP_BODY_TYPE_KINEMATIC, CP_BODY_TYPE_STATIC)
@@ -1232,18 +1233,19 @@ cdef class Body:
                 arb.swapped = swapped
             arb = next_arb
 
-    # -- copy and pickle (pymunk's layout: tamias2d._pickle.PickleMixin) ------------------
-    def _pickle_extra_state(self, dict state):
-        state["special"].append(("is_sleeping", self.is_sleeping))
-        state["special"].append(("_velocity_func", self._velocity_func))
-        state["special"].append(("_position_func", self._position_func))
+    # -- copy and pickle (pymunk's layout, shared in tamias2d._pickle) ----------------------
+    def __getstate__(self):
+        """The body's state as pymunk lays it out (used by copy and pickle).
 
-    def _pickle_restore_special(self, str name, value):
-        # A sleeping body comes back awake.
-        if name == "_velocity_func" and value is not None:
-            self.velocity_func = value
-        elif name == "_position_func" and value is not None:
-            self.position_func = value
+        >>> import tamias2d
+        >>> sorted(tamias2d.Body(1, 2).__getstate__())
+        ['custom', 'general', 'init', 'special']
+        """
+        cdef dict d = pymunk_getstate(self)
+        d["special"] += [("is_sleeping", self.is_sleeping),
+                         ("_velocity_func", self._velocity_func),
+                         ("_position_func", self._position_func)]
+        return d
 
     def __setstate__(self, state):
         """Restore a state made by :meth:`__getstate__` (used by unpickling).
@@ -1258,7 +1260,16 @@ cdef class Body:
             # The compact state of __reduce_ex__ (see tamias2d._snapshot).
             _snapshot().body_setstate(self, state)
             return
-        PickleMixin.__setstate__(self, state)
+        pymunk_setstate(self, state)
+        for k, v in state["special"]:
+            # A sleeping body comes back awake.
+            if k == "_velocity_func" and v is not None:
+                self.velocity_func = v
+            elif k == "_position_func" and v is not None:
+                self.position_func = v
+
+    def __reduce__(self):
+        return pymunk_reduce(self)
 
     def __reduce_ex__(self, protocol):
         """What copy and pickle use: the C struct as bytes, the user
@@ -1274,6 +1285,18 @@ cdef class Body:
         True
         """
         return _snapshot().body_reduce(self)
+
+    def copy(self):
+        """A deep copy of the body (without its shapes, constraints or space).
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 2)
+        >>> b.position = 5, 6
+        >>> c = b.copy()
+        >>> c.position, c is b
+        (Vec2d(5.0, 6.0), False)
+        """
+        return deep_copy(self)
 
 
 # The C defaults behind Body.update_velocity / Body.update_position, for the

@@ -14,7 +14,6 @@ from tamias2d._structs cimport (cpBody, cpSpace, cpConstraint, cpConstraintClass
     cpConstraintPreSolveFunc, cpConstraintPostSolveFunc)
 from tamias2d.vector cimport (cpVect, cpMat2x2, cpTransform, cpMat2x2New)
 from tamias2d.body cimport Body, cpBodyActivate
-from tamias2d._pickle cimport PickleMixin
 from libc.math cimport pow
 
 # -- joint structs (chipmunk_structs.h; field names as Munk2D) ------------------------
@@ -234,7 +233,7 @@ cdef int tamias_constraint_debug_draw(cpConstraint *constraint, cpTransform t, o
                                       object color) except -1
 
 # -- Python ----------------------------------------------------------------------------------
-cdef class Constraint(PickleMixin):
+cdef class Constraint:
     cdef cpConstraint *_constraint   # points at the subclass's embedded joint struct
     cdef Body _a                     # the two bodies (strong references), None before __init__
     cdef Body _b

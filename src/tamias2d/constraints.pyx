@@ -40,6 +40,7 @@ from tamias2d.vector cimport (cpVect, cpMat2x2, cpTransform, cpv, cpvzero, cpveq
     vec2d_from_cpv, cpv_from_object_finite)
 from tamias2d.body cimport (Body, cpBodyActivate, cpBodyGetType, cpBodyWorldToLocal,
     cpBodyRemoveConstraint)
+from tamias2d._pickle cimport pymunk_getstate, pymunk_setstate, pymunk_reduce, deep_copy
 from tamias2d.collision cimport (relative_velocity, normal_relative_velocity, apply_impulses,
     k_scalar)
 
@@ -1449,16 +1450,52 @@ cdef class Constraint:
         self._post_solve_func = func
         _install_solve_funcs(self)
 
-    # -- copy and pickle (pymunk's layout: tamias2d._pickle.PickleMixin) ---------------------------
-    def _pickle_extra_state(self, dict state):
-        state["special"].append(("_pre_solve_func", self._pre_solve_func))
-        state["special"].append(("_post_solve_func", self._post_solve_func))
+    # -- copy and pickle (pymunk's layout, shared in tamias2d._pickle) -----------------------------
+    def __getstate__(self):
+        """The constraint's state as pymunk lays it out (used by copy and
+        pickle): constructor arguments, common properties, user attributes
+        and the callbacks.
 
-    def _pickle_restore_special(self, str name, value):
-        if name == "_pre_solve_func" and value is not None:
-            self.pre_solve = value
-        elif name == "_post_solve_func" and value is not None:
-            self.post_solve = value
+        >>> import tamias2d
+        >>> j = tamias2d.SimpleMotor(tamias2d.Body(1, 1), tamias2d.Body(1, 1), 2)
+        >>> [k for k, v in j.__getstate__()["init"]]
+        ['a', 'b', 'rate']
+        """
+        cdef dict d = pymunk_getstate(self)
+        d["special"] += [("_pre_solve_func", self._pre_solve_func),
+                         ("_post_solve_func", self._post_solve_func)]
+        return d
+
+    def __setstate__(self, state):
+        """Restore a state made by :meth:`__getstate__` (used by unpickling).
+
+        >>> import tamias2d
+        >>> a, b = tamias2d.Body(1, 1), tamias2d.Body(1, 1)
+        >>> j = tamias2d.SimpleMotor(a, b, 2)
+        >>> j.__setstate__(tamias2d.SimpleMotor(a, b, 5).__getstate__())
+        >>> j.rate
+        5.0
+        """
+        pymunk_setstate(self, state)
+        for k, v in state["special"]:
+            if k == "_pre_solve_func" and v is not None:
+                self.pre_solve = v
+            elif k == "_post_solve_func" and v is not None:
+                self.post_solve = v
+
+    def __reduce__(self):
+        return pymunk_reduce(self)
+
+    def copy(self):
+        """A deep copy of the constraint (its bodies are copied too).
+
+        >>> import tamias2d
+        >>> j = tamias2d.SimpleMotor(tamias2d.Body(1, 1), tamias2d.Body(1, 1), 2)
+        >>> j2 = j.copy()
+        >>> j2.rate, j2.a is j.a
+        (2.0, False)
+        """
+        return deep_copy(self)
 
 
 cdef class PinJoint(Constraint):

@@ -8,9 +8,8 @@ from tamias2d._config cimport cpCollisionType
 from tamias2d._structs cimport cpBody
 from tamias2d.vector cimport cpVect, cpBB, cpTransform
 from tamias2d.body cimport Body
-from tamias2d._pickle cimport PickleMixin
 
-cdef class Shape(PickleMixin):
+cdef class Shape:
     cdef cpShape *_shape         # points at the subclass's embedded struct
     cdef Body _body_obj          # the body (strong reference) or None
     cdef object _space           # weakref.ref to the Space holding it, or None

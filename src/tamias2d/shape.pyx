@@ -31,7 +31,8 @@ from tamias2d.vector cimport (cpVect, cpBB, cpTransform, cpv, cpvadd, cpvsub, cp
     vec2d_from_cpv, cpv_from_object, cpv_from_object_finite, bb_from_cpbb,
     cpbb_from_object, cptransform_from_object)
 from tamias2d.body cimport Body, cpBodyActivate, cpBodyAccumulateMassFromShapes
-from tamias2d._pickle cimport PickleMixin, snapshot_module as _snapshot
+from tamias2d._pickle cimport (snapshot_module as _snapshot, pymunk_getstate, pymunk_setstate,
+    pymunk_reduce, deep_copy)
 
 from tamias2d.errors import IllegalShape, IllegalBody, IndexOutOfBounds, AlreadyInSpace
 
@@ -1412,15 +1413,22 @@ cdef class Shape:
     def _hashid(self, v):
         self._shape.hashid = <cpHashValue>v
 
-    def _pickle_extra_state(self, dict state):
-        # pymunk stores the mass or density after the user attributes; an
-        # infinite density (mass on a zero-area shape) it also stores would
-        # turn the mass into NaN when restored, so it is left out.
+    def __getstate__(self):
+        """The state used by copy and pickle, in pymunk's layout.
+
+        >>> import tamias2d
+        >>> sorted(tamias2d.Circle(None, 1).__getstate__())
+        ['custom', 'general', 'init', 'special']
+        """
+        cdef dict d = pymunk_getstate(self)
         if self.mass > 0:
-            state["general"].append(("mass", self.mass))
+            d["general"].append(("mass", self.mass))
         density = self.density
+        # pymunk also stores an infinite density (mass on a zero-area
+        # shape), which would turn the mass into NaN when restored.
         if density > 0 and density < INFINITY:
-            state["general"].append(("density", density))
+            d["general"].append(("density", density))
+        return d
 
     def __setstate__(self, state):
         """Restore a state made by :meth:`__getstate__`.
@@ -1436,7 +1444,10 @@ cdef class Shape:
             # The compact state of __reduce_ex__ (see tamias2d._snapshot).
             _snapshot().shape_setstate(self, state)
             return
-        PickleMixin.__setstate__(self, state)
+        pymunk_setstate(self, state)
+
+    def __reduce__(self):
+        return pymunk_reduce(self)
 
     def __reduce_ex__(self, protocol):
         """What copy and pickle use: the kind, the body, the C struct as bytes
@@ -1451,6 +1462,16 @@ cdef class Shape:
         0.3
         """
         return _snapshot().shape_reduce(self)
+
+    def copy(self):
+        """A deep copy of the shape (and of its body).
+
+        >>> import tamias2d
+        >>> c = tamias2d.Circle(None, 3, (1, 2))
+        >>> c.copy().offset
+        Vec2d(1.0, 2.0)
+        """
+        return deep_copy(self)
 
 
 # -- Circle ----------------------------------------------------------------------------------
