@@ -2,7 +2,6 @@
 # body half of cpSpaceComponent.c, then the Python Body with pymunk 7.3's API.
 # Arithmetic keeps the C association exactly, so results match pymunk bit for
 # bit; see munk2d-inventory.md, group 4.
-import copyreg
 import weakref
 
 from tamias2d._weakkeysview import WeakKeysView
@@ -13,6 +12,8 @@ from libc.stdint cimport uintptr_t
 from libc.string cimport memset
 
 from tamias2d._config cimport cpFloat, cpBool
+from tamias2d._pickle cimport (snapshot_module as _snapshot, pymunk_getstate, pymunk_setstate,
+    pymunk_reduce, deep_copy)
 from tamias2d._structs cimport (cpBody, cpShape, cpSpace, cpArbiter, cpBodyType,
     cpConstraint, cpArbiterThread, cpShapeMassInfo,
     CP_BODY_TYPE_DYNAMIC, CP_BODY_TYPE_KINEMATIC, CP_BODY_TYPE_STATIC)
@@ -494,16 +495,6 @@ cdef int _body_type_from_object(object body_type) except -1:
 
 
 cdef object _arbiter_factory = None
-cdef object _snapshot_module = None
-
-cdef object _snapshot():
-    # Lazy upward import: copy and pickle live above the space.
-    global _snapshot_module
-    if _snapshot_module is None:
-        from tamias2d import _snapshot as module
-        _snapshot_module = module
-    return _snapshot_module
-
 cdef object _get_arbiter_factory():
     # Lazy upward import: the space module sits above this one.
     global _arbiter_factory
@@ -1282,7 +1273,7 @@ cdef class Body:
                 arb.swapped = swapped
             arb = next_arb
 
-    # -- copy and pickle -------------------------------------------------------------------
+    # -- copy and pickle (pymunk's layout, shared in tamias2d._pickle) ----------------------
     def __getstate__(self):
         """The body's state as pymunk lays it out (used by copy and pickle).
 
@@ -1290,18 +1281,10 @@ cdef class Body:
         >>> sorted(tamias2d.Body(1, 2).__getstate__())
         ['custom', 'general', 'init', 'special']
         """
-        cls = type(self)
-        d = {"init": [], "general": [], "custom": [], "special": []}
-        for a in cls._pickle_attrs_init:
-            d["init"].append((a, getattr(self, a)))
-        for a in cls._pickle_attrs_general:
-            d["general"].append((a, getattr(self, a)))
-        for k, v in _user_dict(self).items():
-            if k[0] != "_":
-                d["custom"].append((k, v))
-        d["special"].append(("is_sleeping", self.is_sleeping))
-        d["special"].append(("_velocity_func", self._velocity_func))
-        d["special"].append(("_position_func", self._position_func))
+        cdef dict d = pymunk_getstate(self)
+        d["special"] += [("is_sleeping", self.is_sleeping),
+                         ("_velocity_func", self._velocity_func),
+                         ("_position_func", self._position_func)]
         return d
 
     def __setstate__(self, state):
@@ -1317,11 +1300,7 @@ cdef class Body:
             # The compact state of __reduce_ex__ (see tamias2d._snapshot).
             _snapshot().body_setstate(self, state)
             return
-        self.__init__(*[v for k, v in state["init"]])
-        for k, v in state["general"]:
-            setattr(self, k, v)
-        for k, v in state["custom"]:
-            setattr(self, k, v)
+        pymunk_setstate(self, state)
         for k, v in state["special"]:
             # A sleeping body comes back awake.
             if k == "_velocity_func" and v is not None:
@@ -1330,7 +1309,7 @@ cdef class Body:
                 self.position_func = v
 
     def __reduce__(self):
-        return (copyreg.__newobj__, (type(self),), self.__getstate__())
+        return pymunk_reduce(self)
 
     def __reduce_ex__(self, protocol):
         """What copy and pickle use: the C struct as bytes, the user
@@ -1357,8 +1336,7 @@ cdef class Body:
         >>> c.position, c is b
         (Vec2d(5.0, 6.0), False)
         """
-        import copy as _copy
-        return _copy.deepcopy(self)
+        return deep_copy(self)
 
 
 # The C defaults behind Body.update_velocity / Body.update_position, for the

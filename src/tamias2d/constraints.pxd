@@ -219,6 +219,13 @@ cdef void tamias_constraint_clear_impulse(cpConstraint *c) noexcept nogil
 # rotary joint between two bodies that cannot rotate; or, with sleeping on, a
 # dynamic body of another space. Called before a step.
 cdef int tamias_check_constraints(cpSpace *space) except -1
+# The joints-across-spaces rule, checked by Space.add: a joint may be in a
+# space only if each of its bodies is in that space or in none (a body in no
+# space whose shapes were left in another space counts as of that space).
+# Raise IllegalConstraint (and return -1) when adding `c` to `space`, or when
+# adding `body` to `space` while one of its joints lives in another space.
+cdef int tamias_check_joint_space(cpSpace *space, cpConstraint *c) except -1
+cdef int tamias_check_body_joints(cpSpace *space, cpBody *body) except -1
 # cpSpaceDebugDrawConstraint: draw one constraint with a Python
 # SpaceDebugDrawOptions (draw_dot / draw_segment; segments with a NaN end are
 # skipped, as pymunk does).

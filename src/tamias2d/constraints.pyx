@@ -28,11 +28,10 @@ from libc.string cimport memset
 from libc.stdint cimport uintptr_t
 from cpython.ref cimport PyObject, Py_INCREF
 
-import copyreg
 import weakref
 
 from tamias2d._config cimport cpFloat, cpBool, TAMIAS_FLOAT_0_9F
-from tamias2d._structs cimport (cpBody, cpSpace, cpArray, cpConstraint, cpConstraintClass,
+from tamias2d._structs cimport (cpBody, cpShape, cpSpace, cpArray, cpConstraint, cpConstraintClass,
     CP_BODY_TYPE_DYNAMIC, CP_BODY_TYPE_KINEMATIC, CP_BODY_TYPE_STATIC)
 from tamias2d._containers cimport cpArrayDeleteObj
 from tamias2d.vector cimport (cpVect, cpMat2x2, cpTransform, cpv, cpvzero, cpveql, cpvadd,
@@ -41,10 +40,11 @@ from tamias2d.vector cimport (cpVect, cpMat2x2, cpTransform, cpv, cpvzero, cpveq
     vec2d_from_cpv, cpv_from_object_finite)
 from tamias2d.body cimport (Body, cpBodyActivate, cpBodyGetType, cpBodyWorldToLocal,
     cpBodyRemoveConstraint)
+from tamias2d._pickle cimport pymunk_getstate, pymunk_setstate, pymunk_reduce, deep_copy
 from tamias2d.collision cimport (relative_velocity, normal_relative_velocity, apply_impulses,
     k_scalar)
 
-from tamias2d.errors import IllegalBody, UnsolvableCollision
+from tamias2d.errors import IllegalBody, IllegalConstraint, UnsolvableCollision
 
 cdef extern from "Python.h":
     void PyErr_Restore(PyObject *type, PyObject *value, PyObject *tb)
@@ -766,6 +766,7 @@ cdef enum:
     _NO_BODIES = 6
     _FOREIGN_BODY_A = 7
     _FOREIGN_BODY_B = 8
+    _ZERO_GROOVE = 9
 
 cdef inline bint _bad_dynamic_body(cpBody *body) noexcept nogil:
     # The step's own rule for the bodies it integrates, applied to bodies that
@@ -784,6 +785,12 @@ cdef inline bint _foreign_body(cpSpace *space, cpBody *body) noexcept nogil:
             and body.space != space
             and (body.space != NULL or body.shapeList != NULL))
 
+cdef inline bint _groove_too_short(cpGrooveJoint *joint) noexcept nogil:
+    # groove_a == groove_b (or a groove too short for its direction to be
+    # normalised) leaves a zero normal: the impulse is projected on it as
+    # 0 / 0.
+    return not (cpvdot(joint.grv_n, joint.grv_n) > 0.25)
+
 cdef int _constraint_problem(cpSpace *space, cpConstraint *c) noexcept nogil:
     if c.a == NULL or c.b == NULL:
         return _NO_BODIES
@@ -799,6 +806,8 @@ cdef int _constraint_problem(cpSpace *space, cpConstraint *c) noexcept nogil:
         return _ZERO_RATCHET
     if cpConstraintIsGearJoint(c) and (<cpGearJoint *>c).ratio == 0.0:
         return _ZERO_RATIO
+    if cpConstraintIsGrooveJoint(c) and _groove_too_short(<cpGrooveJoint *>c):
+        return _ZERO_GROOVE
     if ((cpConstraintIsDampedRotarySpring(c) or cpConstraintIsRotaryLimitJoint(c)
             or cpConstraintIsRatchetJoint(c) or cpConstraintIsGearJoint(c)
             or cpConstraintIsSimpleMotor(c))
@@ -834,12 +843,71 @@ cdef int tamias_check_constraints(cpSpace *space) except -1:
             f"still in a space), and sleeping is on: add the body to this space, or "
             f"turn sleeping off.")
     if problem == _ZERO_RATCHET:
-        raise ValueError(f"{obj!r}: the ratchet distance must not be 0 in a step.")
+        raise IllegalConstraint(f"{obj!r}: the ratchet distance must not be 0 in a step.")
     if problem == _ZERO_RATIO:
-        raise ValueError(f"{obj!r}: the gear ratio must not be 0 in a step.")
+        raise IllegalConstraint(f"{obj!r}: the gear ratio must not be 0 in a step.")
+    if problem == _ZERO_GROOVE:
+        raise IllegalConstraint(
+            f"{obj!r}: the groove has no length (groove_a {obj.groove_a!r}, groove_b "
+            f"{obj.groove_b!r}); it must not be 0 in a step.")
     raise UnsolvableCollision(
         f"Unsolvable constraint: {obj!r} joins two bodies that cannot rotate "
         f"(both have an infinite moment of inertia or are not dynamic).")
+
+
+# -- joints across spaces ----------------------------------------------------------------------------
+# Munk2D links a joint into both bodies' constraint lists whatever space the
+# bodies are in. A body of another space then drags the joint into that
+# space's sleeping components and, when they wake, into its constraint
+# array, a joint that space never had (and keeps reading after it is freed).
+# So a joint and its bodies share one space (or the bodies are in none).
+
+cdef cpSpace *_space_of_body(cpBody *body) noexcept nogil:
+    # The space a body belongs to; for a body removed from its space whose
+    # shapes stayed there, that space (sleeping would move those shapes).
+    cdef cpShape *shape
+    if body.space != NULL:
+        return body.space
+    shape = body.shapeList
+    while shape != NULL:
+        if shape.space != NULL:
+            return shape.space
+        shape = shape.next
+    return NULL
+
+cdef object _space_name(cpSpace *space):
+    if space != NULL and space.userData != NULL:
+        return repr(<object>space.userData)
+    return "another space"
+
+cdef int tamias_check_joint_space(cpSpace *space, cpConstraint *c) except -1:
+    cdef cpBody *body
+    cdef cpSpace *other
+    cdef int i
+    for i in range(2):
+        body = c.a if i == 0 else c.b
+        other = _space_of_body(body)
+        if other != NULL and other != space:
+            obj = <object>c.userData if c.userData != NULL else None
+            b = <object>body.userData if body.userData != NULL else None
+            raise IllegalConstraint(
+                f"{obj!r} joins {b!r} (body {'a' if i == 0 else 'b'}), which belongs to "
+                f"{_space_name(other)}: a joint and its bodies must be in the same space "
+                f"(or the bodies in none). Remove the body from that space first.")
+    return 0
+
+cdef int tamias_check_body_joints(cpSpace *space, cpBody *body) except -1:
+    # The body's list holds the joints that are in some space.
+    cdef cpConstraint *c = body.constraintList
+    while c != NULL:
+        if c.space != NULL and c.space != space:
+            obj = <object>c.userData if c.userData != NULL else None
+            b = <object>body.userData if body.userData != NULL else None
+            raise IllegalConstraint(
+                f"{b!r} has a joint, {obj!r}, in {_space_name(c.space)}: a body and its "
+                f"joints must be in the same space. Remove the joint from that space first.")
+        c = _constraint_next(c, body)
+    return 0
 
 
 # -- debug drawing (cpSpaceDebug.c) -------------------------------------------------------------------------------
@@ -1002,31 +1070,118 @@ cdef cpFloat _spring_torque_trampoline(cpConstraint *c, cpFloat relativeAngle) n
 
 # == Python level ===================================================================================================
 
-cdef inline double _finite_arg(object value, str what) except? -1.0:
+# -- parameter checks ----------------------------------------------------------------------------
+# A joint parameter is refused when it is set (constructor or setter) if the
+# solver cannot use it: the joints square lengths, multiply them by
+# stiffnesses and rates and divide by ratios, so a value near the double
+# range makes the first steps non-finite whatever the bodies are. What is
+# refused, and why, is listed in docs/stability.md ("Joint parameters").
+
+PARAMETER_LIMIT = 1e100
+cdef double _LIMIT = 1e100     # PARAMETER_LIMIT, for C
+
+
+cdef inline double _float_arg(object value, str what) except? -1.0:
     cdef double x
     try:
         x = value
+        return x
     except TypeError:
         raise TypeError(f"{what} must be a number, not {type(value).__name__}") from None
-    if not isfinite(x):
-        raise ValueError(f"{what} must be a finite number, got {x!r}")
+
+
+cdef double _bounded_arg(object value, str what) except? -1.0:
+    # A finite number of magnitude at most PARAMETER_LIMIT.
+    cdef double x = _float_arg(value, what)
+    if not (cpfabs(x) <= _LIMIT):
+        if not isfinite(x):
+            raise IllegalConstraint(f"{what} must be a finite number, got {x!r}")
+        raise IllegalConstraint(
+            f"{what} = {x!r} is too large: joint parameters must be within "
+            f"+-{_LIMIT:g} (the solver squares and multiplies them)")
     return x
 
 
-cdef inline double _number_arg(object value, str what) except? -1.0:
-    # Any number but NaN (an infinite limit is a valid "no limit").
-    cdef double x
-    try:
-        x = value
-    except TypeError:
-        raise TypeError(f"{what} must be a number, not {type(value).__name__}") from None
+cdef double _non_negative_arg(object value, str what) except? -1.0:
+    cdef double x = _bounded_arg(value, what)
+    if not (x >= 0.0):
+        raise IllegalConstraint(f"{what} must be >= 0, got {x!r}")
+    return x
+
+
+cdef double _lower_limit_arg(object value, str what) except? -1.0:
+    # A lower limit: anything up to PARAMETER_LIMIT, -inf for "none". A
+    # larger one can never be met and pushes the bodies apart without end.
+    cdef double x = _float_arg(value, what)
     if isnan(x):
-        raise ValueError(f"{what} must not be NaN")
+        raise IllegalConstraint(f"{what} must not be NaN")
+    if x > _LIMIT:
+        raise IllegalConstraint(
+            f"{what} = {x!r} is a lower limit that can never be met: it must be at "
+            f"most {_LIMIT:g} (-inf for no lower limit)")
     return x
+
+
+cdef double _upper_limit_arg(object value, str what) except? -1.0:
+    # An upper limit: anything from -PARAMETER_LIMIT, inf for "none".
+    cdef double x = _float_arg(value, what)
+    if isnan(x):
+        raise IllegalConstraint(f"{what} must not be NaN")
+    if x < -_LIMIT:
+        raise IllegalConstraint(
+            f"{what} = {x!r} is an upper limit that can never be met: it must be at "
+            f"least {-_LIMIT:g} (inf for no upper limit)")
+    return x
+
+
+cdef double _divisor_arg(object value, str what) except? -1.0:
+    # A ratio or notch distance the solver divides by: 0 is refused in a step
+    # (pymunk's tests build joints with it), any other value needs a finite
+    # inverse within the limit.
+    cdef double x = _bounded_arg(value, what)
+    if x != 0.0 and not (cpfabs(x) >= 1.0 / _LIMIT):
+        raise IllegalConstraint(
+            f"{what} = {x!r} is too small: its inverse must be within +-{_LIMIT:g}")
+    return x
+
+
+cdef double _max_arg(object value, str what) except? -1.0:
+    # max_force, max_bias: >= 0, inf (the default) for no limit.
+    cdef double x = _float_arg(value, what)
+    if not (x >= 0.0):
+        raise IllegalConstraint(f"{what} must be >= 0, got {x!r}")
+    return x
+
+
+cdef int _check_point(cpVect v, str what) except -1:
+    if not (cpfabs(v.x) <= _LIMIT and cpfabs(v.y) <= _LIMIT):
+        raise IllegalConstraint(
+            f"{what} = ({v.x!r}, {v.y!r}) is too far out: joint coordinates must be "
+            f"within +-{_LIMIT:g} (the solver squares them)")
+    return 0
 
 
 cdef inline cpVect _point_arg(object value, str what) except *:
-    return cpv_from_object_finite(value, what)
+    cdef cpVect v = cpv_from_object_finite(value, what)
+    _check_point(v, what)
+    return v
+
+
+# -- shared setter bodies ------------------------------------------------------------------------
+# Every parameter setter wakes the bodies and stores the checked value, as
+# Munk2D's cpXxxSetYyy do.
+
+cdef inline int _set_float(Constraint self, cpFloat *field, double value) except -1:
+    cpConstraintActivateBodies(self._constraint)
+    field[0] = value
+    return 0
+
+
+cdef inline int _set_point(Constraint self, cpVect *field, object value, str what) except -1:
+    cdef cpVect v = _point_arg(value, what)
+    cpConstraintActivateBodies(self._constraint)
+    field[0] = v
+    return 0
 
 
 cdef Body _body_arg(object body, str which):
@@ -1171,11 +1326,7 @@ cdef class Constraint:
 
     @max_force.setter
     def max_force(self, max_force):
-        cdef double f = _number_arg(max_force, "max_force")
-        if not (f >= 0.0):
-            raise ValueError(f"max_force must be >= 0, got {f!r}")
-        cpConstraintActivateBodies(self._constraint)
-        self._constraint.maxForce = f
+        _set_float(self, &self._constraint.maxForce, _max_arg(max_force, "max_force"))
 
     @property
     def error_bias(self):
@@ -1193,11 +1344,7 @@ cdef class Constraint:
 
     @error_bias.setter
     def error_bias(self, error_bias):
-        cdef double e = _finite_arg(error_bias, "error_bias")
-        if not (e >= 0.0):
-            raise ValueError(f"error_bias must be >= 0, got {e!r}")
-        cpConstraintActivateBodies(self._constraint)
-        self._constraint.errorBias = e
+        _set_float(self, &self._constraint.errorBias, _non_negative_arg(error_bias, "error_bias"))
 
     @property
     def max_bias(self):
@@ -1214,11 +1361,7 @@ cdef class Constraint:
 
     @max_bias.setter
     def max_bias(self, max_bias):
-        cdef double m = _number_arg(max_bias, "max_bias")
-        if not (m >= 0.0):
-            raise ValueError(f"max_bias must be >= 0, got {m!r}")
-        cpConstraintActivateBodies(self._constraint)
-        self._constraint.maxBias = m
+        _set_float(self, &self._constraint.maxBias, _max_arg(max_bias, "max_bias"))
 
     @property
     def collide_bodies(self):
@@ -1306,7 +1449,7 @@ cdef class Constraint:
         self._post_solve_func = func
         _install_solve_funcs(self)
 
-    # -- copy and pickle ---------------------------------------------------------------------------
+    # -- copy and pickle (pymunk's layout, shared in tamias2d._pickle) -----------------------------
     def __getstate__(self):
         """The constraint's state as pymunk lays it out (used by copy and
         pickle): constructor arguments, common properties, user attributes
@@ -1317,17 +1460,9 @@ cdef class Constraint:
         >>> [k for k, v in j.__getstate__()["init"]]
         ['a', 'b', 'rate']
         """
-        cls = type(self)
-        d = {"init": [], "general": [], "custom": [], "special": []}
-        for a in cls._pickle_attrs_init:
-            d["init"].append((a, getattr(self, a)))
-        for a in cls._pickle_attrs_general:
-            d["general"].append((a, getattr(self, a)))
-        for k, v in getattr(self, "__dict__").items():
-            if k[0] != "_":
-                d["custom"].append((k, v))
-        d["special"].append(("_pre_solve_func", self._pre_solve_func))
-        d["special"].append(("_post_solve_func", self._post_solve_func))
+        cdef dict d = pymunk_getstate(self)
+        d["special"] += [("_pre_solve_func", self._pre_solve_func),
+                         ("_post_solve_func", self._post_solve_func)]
         return d
 
     def __setstate__(self, state):
@@ -1340,11 +1475,7 @@ cdef class Constraint:
         >>> j.rate
         5.0
         """
-        self.__init__(*[v for k, v in state["init"]])
-        for k, v in state["general"]:
-            setattr(self, k, v)
-        for k, v in state["custom"]:
-            setattr(self, k, v)
+        pymunk_setstate(self, state)
         for k, v in state["special"]:
             if k == "_pre_solve_func" and v is not None:
                 self.pre_solve = v
@@ -1352,7 +1483,7 @@ cdef class Constraint:
                 self.post_solve = v
 
     def __reduce__(self):
-        return (copyreg.__newobj__, (type(self),), self.__getstate__())
+        return pymunk_reduce(self)
 
     def copy(self):
         """A deep copy of the constraint (its bodies are copied too).
@@ -1363,8 +1494,7 @@ cdef class Constraint:
         >>> j2.rate, j2.a is j.a
         (2.0, False)
         """
-        import copy as _copy
-        return _copy.deepcopy(self)
+        return deep_copy(self)
 
 
 cdef class PinJoint(Constraint):
@@ -1410,9 +1540,7 @@ cdef class PinJoint(Constraint):
 
     @anchor_a.setter
     def anchor_a(self, anchor):
-        cdef cpVect v = _point_arg(anchor, "anchor_a")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.anchorA = v
+        _set_point(self, &self._joint.anchorA, anchor, "anchor_a")
 
     @property
     def anchor_b(self):
@@ -1427,9 +1555,7 @@ cdef class PinJoint(Constraint):
 
     @anchor_b.setter
     def anchor_b(self, anchor):
-        cdef cpVect v = _point_arg(anchor, "anchor_b")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.anchorB = v
+        _set_point(self, &self._joint.anchorB, anchor, "anchor_b")
 
     @property
     def distance(self):
@@ -1445,9 +1571,7 @@ cdef class PinJoint(Constraint):
 
     @distance.setter
     def distance(self, distance):
-        cdef double d = _finite_arg(distance, "distance")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.dist = d
+        _set_float(self, &self._joint.dist, _bounded_arg(distance, "distance"))
 
 
 cdef class SlideJoint(Constraint):
@@ -1475,8 +1599,8 @@ cdef class SlideJoint(Constraint):
         _start_init(self, a, b)
         cdef cpVect aa = _point_arg(anchor_a, "anchor_a")
         cdef cpVect ab = _point_arg(anchor_b, "anchor_b")
-        cdef double mn = _number_arg(min, "min")
-        cdef double mx = _number_arg(max, "max")
+        cdef double mn = _lower_limit_arg(min, "min")
+        cdef double mx = _upper_limit_arg(max, "max")
         cpSlideJointInit(&self._joint, &(<Body>a)._body, &(<Body>b)._body, aa, ab, mn, mx)
         _finish_init(self, a, b)
 
@@ -1493,9 +1617,7 @@ cdef class SlideJoint(Constraint):
 
     @anchor_a.setter
     def anchor_a(self, anchor):
-        cdef cpVect v = _point_arg(anchor, "anchor_a")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.anchorA = v
+        _set_point(self, &self._joint.anchorA, anchor, "anchor_a")
 
     @property
     def anchor_b(self):
@@ -1510,9 +1632,7 @@ cdef class SlideJoint(Constraint):
 
     @anchor_b.setter
     def anchor_b(self, anchor):
-        cdef cpVect v = _point_arg(anchor, "anchor_b")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.anchorB = v
+        _set_point(self, &self._joint.anchorB, anchor, "anchor_b")
 
     @property
     def min(self):
@@ -1528,9 +1648,7 @@ cdef class SlideJoint(Constraint):
 
     @min.setter
     def min(self, min):
-        cdef double v = _number_arg(min, "min")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.min = v
+        _set_float(self, &self._joint.min, _lower_limit_arg(min, "min"))
 
     @property
     def max(self):
@@ -1546,9 +1664,7 @@ cdef class SlideJoint(Constraint):
 
     @max.setter
     def max(self, max):
-        cdef double v = _number_arg(max, "max")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.max = v
+        _set_float(self, &self._joint.max, _upper_limit_arg(max, "max"))
 
 
 cdef class PivotJoint(Constraint):
@@ -1582,6 +1698,8 @@ cdef class PivotJoint(Constraint):
             # cpPivotJointNew: the pivot seen from each body.
             aa = cpBodyWorldToLocal(&(<Body>a)._body, pivot)
             ab = cpBodyWorldToLocal(&(<Body>b)._body, pivot)
+            _check_point(aa, "the pivot seen from body a")
+            _check_point(ab, "the pivot seen from body b")
         elif len(args) == 2:
             aa = _point_arg(args[0], "anchor_a")
             ab = _point_arg(args[1], "anchor_b")
@@ -1604,9 +1722,7 @@ cdef class PivotJoint(Constraint):
 
     @anchor_a.setter
     def anchor_a(self, anchor):
-        cdef cpVect v = _point_arg(anchor, "anchor_a")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.anchorA = v
+        _set_point(self, &self._joint.anchorA, anchor, "anchor_a")
 
     @property
     def anchor_b(self):
@@ -1621,9 +1737,7 @@ cdef class PivotJoint(Constraint):
 
     @anchor_b.setter
     def anchor_b(self, anchor):
-        cdef cpVect v = _point_arg(anchor, "anchor_b")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.anchorB = v
+        _set_point(self, &self._joint.anchorB, anchor, "anchor_b")
 
 
 cdef class GrooveJoint(Constraint):
@@ -1666,9 +1780,7 @@ cdef class GrooveJoint(Constraint):
 
     @anchor_b.setter
     def anchor_b(self, anchor):
-        cdef cpVect v = _point_arg(anchor, "anchor_b")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.anchorB = v
+        _set_point(self, &self._joint.anchorB, anchor, "anchor_b")
 
     @property
     def groove_a(self):
@@ -1684,9 +1796,9 @@ cdef class GrooveJoint(Constraint):
     @groove_a.setter
     def groove_a(self, groove):
         cdef cpVect v = _point_arg(groove, "groove_a")
+        cpConstraintActivateBodies(self._constraint)
         self._joint.grv_a = v
         self._joint.grv_n = cpvperp(cpvnormalize(cpvsub(self._joint.grv_b, v)))
-        cpConstraintActivateBodies(self._constraint)
 
     @property
     def groove_b(self):
@@ -1702,9 +1814,9 @@ cdef class GrooveJoint(Constraint):
     @groove_b.setter
     def groove_b(self, groove):
         cdef cpVect v = _point_arg(groove, "groove_b")
+        cpConstraintActivateBodies(self._constraint)
         self._joint.grv_b = v
         self._joint.grv_n = cpvperp(cpvnormalize(cpvsub(v, self._joint.grv_a)))
-        cpConstraintActivateBodies(self._constraint)
 
 
 cdef class DampedSpring(Constraint):
@@ -1737,9 +1849,9 @@ cdef class DampedSpring(Constraint):
         _start_init(self, a, b)
         cdef cpVect aa = _point_arg(anchor_a, "anchor_a")
         cdef cpVect ab = _point_arg(anchor_b, "anchor_b")
-        cdef double r = _finite_arg(rest_length, "rest_length")
-        cdef double k = _finite_arg(stiffness, "stiffness")
-        cdef double d = _finite_arg(damping, "damping")
+        cdef double r = _bounded_arg(rest_length, "rest_length")
+        cdef double k = _bounded_arg(stiffness, "stiffness")
+        cdef double d = _non_negative_arg(damping, "damping")
         cpDampedSpringInit(&self._joint, &(<Body>a)._body, &(<Body>b)._body, aa, ab, r, k, d)
         if self._force_func is not None:
             self._joint.springForceFunc = _spring_force_trampoline
@@ -1758,9 +1870,7 @@ cdef class DampedSpring(Constraint):
 
     @anchor_a.setter
     def anchor_a(self, anchor):
-        cdef cpVect v = _point_arg(anchor, "anchor_a")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.anchorA = v
+        _set_point(self, &self._joint.anchorA, anchor, "anchor_a")
 
     @property
     def anchor_b(self):
@@ -1775,9 +1885,7 @@ cdef class DampedSpring(Constraint):
 
     @anchor_b.setter
     def anchor_b(self, anchor):
-        cdef cpVect v = _point_arg(anchor, "anchor_b")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.anchorB = v
+        _set_point(self, &self._joint.anchorB, anchor, "anchor_b")
 
     @property
     def rest_length(self):
@@ -1793,9 +1901,7 @@ cdef class DampedSpring(Constraint):
 
     @rest_length.setter
     def rest_length(self, rest_length):
-        cdef double v = _finite_arg(rest_length, "rest_length")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.restLength = v
+        _set_float(self, &self._joint.restLength, _bounded_arg(rest_length, "rest_length"))
 
     @property
     def stiffness(self):
@@ -1811,9 +1917,7 @@ cdef class DampedSpring(Constraint):
 
     @stiffness.setter
     def stiffness(self, stiffness):
-        cdef double v = _finite_arg(stiffness, "stiffness")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.stiffness = v
+        _set_float(self, &self._joint.stiffness, _bounded_arg(stiffness, "stiffness"))
 
     @property
     def damping(self):
@@ -1829,9 +1933,7 @@ cdef class DampedSpring(Constraint):
 
     @damping.setter
     def damping(self, damping):
-        cdef double v = _finite_arg(damping, "damping")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.damping = v
+        _set_float(self, &self._joint.damping, _non_negative_arg(damping, "damping"))
 
     @staticmethod
     def spring_force(spring, dist):
@@ -1905,9 +2007,9 @@ cdef class DampedRotarySpring(Constraint):
 
     def __init__(self, a, b, rest_angle, stiffness, damping):
         _start_init(self, a, b)
-        cdef double r = _finite_arg(rest_angle, "rest_angle")
-        cdef double k = _finite_arg(stiffness, "stiffness")
-        cdef double d = _finite_arg(damping, "damping")
+        cdef double r = _bounded_arg(rest_angle, "rest_angle")
+        cdef double k = _bounded_arg(stiffness, "stiffness")
+        cdef double d = _non_negative_arg(damping, "damping")
         cpDampedRotarySpringInit(&self._joint, &(<Body>a)._body, &(<Body>b)._body, r, k, d)
         if self._torque_func is not None:
             self._joint.springTorqueFunc = _spring_torque_trampoline
@@ -1927,9 +2029,7 @@ cdef class DampedRotarySpring(Constraint):
 
     @rest_angle.setter
     def rest_angle(self, rest_angle):
-        cdef double v = _finite_arg(rest_angle, "rest_angle")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.restAngle = v
+        _set_float(self, &self._joint.restAngle, _bounded_arg(rest_angle, "rest_angle"))
 
     @property
     def stiffness(self):
@@ -1945,9 +2045,7 @@ cdef class DampedRotarySpring(Constraint):
 
     @stiffness.setter
     def stiffness(self, stiffness):
-        cdef double v = _finite_arg(stiffness, "stiffness")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.stiffness = v
+        _set_float(self, &self._joint.stiffness, _bounded_arg(stiffness, "stiffness"))
 
     @property
     def damping(self):
@@ -1963,9 +2061,7 @@ cdef class DampedRotarySpring(Constraint):
 
     @damping.setter
     def damping(self, damping):
-        cdef double v = _finite_arg(damping, "damping")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.damping = v
+        _set_float(self, &self._joint.damping, _non_negative_arg(damping, "damping"))
 
     @staticmethod
     def spring_torque(spring, relative_angle):
@@ -2030,8 +2126,8 @@ cdef class RotaryLimitJoint(Constraint):
 
     def __init__(self, a, b, min, max):
         _start_init(self, a, b)
-        cdef double mn = _number_arg(min, "min")
-        cdef double mx = _number_arg(max, "max")
+        cdef double mn = _lower_limit_arg(min, "min")
+        cdef double mx = _upper_limit_arg(max, "max")
         cpRotaryLimitJointInit(&self._joint, &(<Body>a)._body, &(<Body>b)._body, mn, mx)
         _finish_init(self, a, b)
 
@@ -2049,9 +2145,7 @@ cdef class RotaryLimitJoint(Constraint):
 
     @min.setter
     def min(self, min):
-        cdef double v = _number_arg(min, "min")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.min = v
+        _set_float(self, &self._joint.min, _lower_limit_arg(min, "min"))
 
     @property
     def max(self):
@@ -2067,9 +2161,7 @@ cdef class RotaryLimitJoint(Constraint):
 
     @max.setter
     def max(self, max):
-        cdef double v = _number_arg(max, "max")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.max = v
+        _set_float(self, &self._joint.max, _upper_limit_arg(max, "max"))
 
 
 cdef class RatchetJoint(Constraint):
@@ -2094,8 +2186,8 @@ cdef class RatchetJoint(Constraint):
 
     def __init__(self, a, b, phase, ratchet):
         _start_init(self, a, b)
-        cdef double p = _finite_arg(phase, "phase")
-        cdef double r = _finite_arg(ratchet, "ratchet")
+        cdef double p = _bounded_arg(phase, "phase")
+        cdef double r = _divisor_arg(ratchet, "ratchet")
         cpRatchetJointInit(&self._joint, &(<Body>a)._body, &(<Body>b)._body, p, r)
         _finish_init(self, a, b)
 
@@ -2113,9 +2205,7 @@ cdef class RatchetJoint(Constraint):
 
     @angle.setter
     def angle(self, angle):
-        cdef double v = _finite_arg(angle, "angle")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.angle = v
+        _set_float(self, &self._joint.angle, _bounded_arg(angle, "angle"))
 
     @property
     def phase(self):
@@ -2131,9 +2221,7 @@ cdef class RatchetJoint(Constraint):
 
     @phase.setter
     def phase(self, phase):
-        cdef double v = _finite_arg(phase, "phase")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.phase = v
+        _set_float(self, &self._joint.phase, _bounded_arg(phase, "phase"))
 
     @property
     def ratchet(self):
@@ -2150,9 +2238,7 @@ cdef class RatchetJoint(Constraint):
 
     @ratchet.setter
     def ratchet(self, ratchet):
-        cdef double v = _finite_arg(ratchet, "ratchet")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.ratchet = v
+        _set_float(self, &self._joint.ratchet, _divisor_arg(ratchet, "ratchet"))
 
 
 cdef class GearJoint(Constraint):
@@ -2176,8 +2262,8 @@ cdef class GearJoint(Constraint):
 
     def __init__(self, a, b, phase, ratio):
         _start_init(self, a, b)
-        cdef double p = _finite_arg(phase, "phase")
-        cdef double r = _finite_arg(ratio, "ratio")
+        cdef double p = _bounded_arg(phase, "phase")
+        cdef double r = _divisor_arg(ratio, "ratio")
         cpGearJointInit(&self._joint, &(<Body>a)._body, &(<Body>b)._body, p, r)
         _finish_init(self, a, b)
 
@@ -2195,9 +2281,7 @@ cdef class GearJoint(Constraint):
 
     @phase.setter
     def phase(self, phase):
-        cdef double v = _finite_arg(phase, "phase")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.phase = v
+        _set_float(self, &self._joint.phase, _bounded_arg(phase, "phase"))
 
     @property
     def ratio(self):
@@ -2213,7 +2297,7 @@ cdef class GearJoint(Constraint):
 
     @ratio.setter
     def ratio(self, ratio):
-        cdef double v = _finite_arg(ratio, "ratio")
+        cdef double v = _divisor_arg(ratio, "ratio")
         cpConstraintActivateBodies(self._constraint)
         self._joint.ratio = v
         self._joint.ratio_inv = 1.0 / v
@@ -2240,7 +2324,7 @@ cdef class SimpleMotor(Constraint):
 
     def __init__(self, a, b, rate):
         _start_init(self, a, b)
-        cdef double r = _finite_arg(rate, "rate")
+        cdef double r = _bounded_arg(rate, "rate")
         cpSimpleMotorInit(&self._joint, &(<Body>a)._body, &(<Body>b)._body, r)
         _finish_init(self, a, b)
 
@@ -2258,9 +2342,7 @@ cdef class SimpleMotor(Constraint):
 
     @rate.setter
     def rate(self, rate):
-        cdef double v = _finite_arg(rate, "rate")
-        cpConstraintActivateBodies(self._constraint)
-        self._joint.rate = v
+        _set_float(self, &self._joint.rate, _bounded_arg(rate, "rate"))
 
 
 cdef tuple _JOINT_TYPES = (PinJoint, SlideJoint, PivotJoint, GrooveJoint, DampedSpring,

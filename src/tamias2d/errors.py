@@ -10,6 +10,7 @@ Checks in tamias2d are real ``raise`` statements: ``python -O`` keeps them.
 __all__ = [
     "Tamias2DError", "NotCircleShape", "NotPolyShape", "NotSegmentShape",
     "IndexOutOfBounds", "IllegalBody", "IllegalShape", "IllegalVector",
+    "IllegalConstraint",
     "UnsolvableCollision",
     "CollisionContactOverflow", "SameVertices", "CollisionError",
     "SpaceLocked", "AlreadyInSpace", "NotInSpace", "CallbackError",
@@ -59,6 +60,14 @@ class IllegalBody(Tamias2DError, ValueError, AssertionError):
 class IllegalShape(Tamias2DError, ValueError, AssertionError):
     """A shape definition that cannot be built: negative radius, no vertices,
     non-finite coordinates."""
+
+
+class IllegalConstraint(Tamias2DError, ValueError, AssertionError):
+    """A joint parameter the solver cannot use: NaN, an infinity that is not
+    an open limit, a magnitude above ``tamias2d.constraints.PARAMETER_LIMIT``
+    (1e100), a ratio or ratchet whose inverse is not finite, a negative
+    damping, a groove of zero length; or a joint whose bodies belong to
+    another space than the joint's."""
 
 
 class IllegalVector(Tamias2DError, ValueError, AssertionError):

@@ -9,8 +9,6 @@ every number matches pymunk 7.3. The Python half is pymunk's shape API.
 >>> c.area
 12.566370614359172
 """
-import copy as _copy
-import copyreg as _copyreg
 import weakref as _weakref
 from typing import NamedTuple
 
@@ -34,6 +32,8 @@ from tamias2d.vector cimport (cpVect, cpBB, cpTransform, cpv, cpvadd, cpvsub, cp
     vec2d_from_cpv, cpv_from_object, cpv_from_object_finite, bb_from_cpbb,
     cpbb_from_object, cptransform_from_object)
 from tamias2d.body cimport Body, cpBodyActivate, cpBodyAccumulateMassFromShapes
+from tamias2d._pickle cimport (snapshot_module as _snapshot, pymunk_getstate, pymunk_setstate,
+    pymunk_reduce, deep_copy)
 
 from tamias2d.errors import IllegalShape, IllegalBody, IndexOutOfBounds, AlreadyInSpace
 
@@ -1053,17 +1053,6 @@ cdef int _check_transform_finite(const cpTransform *t) except -1:
     return 0
 
 
-cdef object _snapshot_module = None
-
-cdef object _snapshot():
-    # Lazy upward import: copy and pickle live above the space.
-    global _snapshot_module
-    if _snapshot_module is None:
-        from tamias2d import _snapshot as module
-        _snapshot_module = module
-    return _snapshot_module
-
-
 cdef object _shape_from_ptr(const cpShape *shape):
     if shape == NULL or shape.userData == NULL:
         return None
@@ -1448,14 +1437,7 @@ cdef class Shape:
         >>> sorted(tamias2d.Circle(None, 1).__getstate__())
         ['custom', 'general', 'init', 'special']
         """
-        d = {"init": [], "general": [], "custom": [], "special": []}
-        for a in type(self)._pickle_attrs_init:
-            d["init"].append((a, getattr(self, a)))
-        for a in type(self)._pickle_attrs_general:
-            d["general"].append((a, getattr(self, a)))
-        for k, v in vars(self).items():
-            if k[0] != "_":
-                d["custom"].append((k, v))
+        cdef dict d = pymunk_getstate(self)
         if self.mass > 0:
             d["general"].append(("mass", self.mass))
         density = self.density
@@ -1479,15 +1461,10 @@ cdef class Shape:
             # The compact state of __reduce_ex__ (see tamias2d._snapshot).
             _snapshot().shape_setstate(self, state)
             return
-        init_args = [v for k, v in state["init"]]
-        self.__init__(*init_args)
-        for k, v in state["general"]:
-            setattr(self, k, v)
-        for k, v in state["custom"]:
-            setattr(self, k, v)
+        pymunk_setstate(self, state)
 
     def __reduce__(self):
-        return (_copyreg.__newobj__, (type(self),), self.__getstate__())
+        return pymunk_reduce(self)
 
     def __reduce_ex__(self, protocol):
         """What copy and pickle use: the kind, the body, the C struct as bytes
@@ -1511,7 +1488,7 @@ cdef class Shape:
         >>> c.copy().offset
         Vec2d(1.0, 2.0)
         """
-        return _copy.deepcopy(self)
+        return deep_copy(self)
 
 
 # -- Circle ----------------------------------------------------------------------------------
