@@ -11,7 +11,7 @@
 # The fields it reads (cpSpace.stepThread, stepLock, stepWaiters) are only
 # written while holding the GIL, so a thread holding the GIL sees them
 # consistently. Cost when no step runs: one load and one branch.
-from tamias2d._structs cimport cpSpace, cpBody, cpShape
+from tamias2d._structs cimport cpSpace, cpBody, cpShape, cpConstraint
 
 cdef int tamias_wait_for_step_slow(cpSpace *space) except -1
 
@@ -42,6 +42,17 @@ cdef inline int tamias_wait_shape(const cpShape *shape) except -1:
         space = tamias_body_space(shape.body)
     if space != NULL and space.stepThread != 0:
         return tamias_wait_for_step_slow(space)
+    return 0
+
+# A joint's space, and its bodies' (changing a joint wakes its bodies, even
+# when the joint itself is in no space).
+cdef inline int tamias_wait_constraint(const cpConstraint *c) except -1:
+    if c.space != NULL and c.space.stepThread != 0:
+        tamias_wait_for_step_slow(c.space)
+    if c.a != NULL:
+        tamias_wait_body(c.a)
+    if c.b != NULL:
+        tamias_wait_body(c.b)
     return 0
 
 # The stepping side, called with the GIL held around the GIL-free step.

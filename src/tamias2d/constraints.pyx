@@ -40,6 +40,8 @@ from tamias2d.vector cimport (cpVect, cpMat2x2, cpTransform, cpv, cpvzero, cpveq
     vec2d_from_cpv, cpv_from_object_finite)
 from tamias2d.body cimport (Body, cpBodyActivate, cpBodyGetType, cpBodyWorldToLocal,
     cpBodyRemoveConstraint)
+from tamias2d._threadguard cimport tamias_wait_constraint
+from tamias2d._private cimport cpConstraintNext
 from tamias2d._pickle cimport pymunk_getstate, pymunk_setstate, pymunk_reduce, deep_copy
 from tamias2d.collision cimport (relative_velocity, normal_relative_velocity, apply_impulses,
     k_scalar)
@@ -701,7 +703,6 @@ cdef void tamias_constraint_detach(cpConstraint *constraint) noexcept nogil:
     constraint.next_a = NULL
     constraint.next_b = NULL
 
-from tamias2d._private cimport cpConstraintNext
 
 cdef void _detach_body_constraints(cpSpace *space, cpBody *body) noexcept nogil:
     cdef cpConstraint *c = body.constraintList
@@ -906,7 +907,7 @@ cdef int tamias_check_body_joints(cpSpace *space, cpBody *body) except -1:
             raise IllegalConstraint(
                 f"{b!r} has a joint, {obj!r}, in {_space_name(c.space)}: a body and its "
                 f"joints must be in the same space. Remove the joint from that space first.")
-        c = _constraint_next(c, body)
+        c = cpConstraintNext(c, body)
     return 0
 
 
@@ -1172,6 +1173,7 @@ cdef inline cpVect _point_arg(object value, str what) except *:
 # Munk2D's cpXxxSetYyy do.
 
 cdef inline int _set_float(Constraint self, cpFloat *field, double value) except -1:
+    tamias_wait_constraint(self._constraint)
     cpConstraintActivateBodies(self._constraint)
     field[0] = value
     return 0
@@ -1179,6 +1181,7 @@ cdef inline int _set_float(Constraint self, cpFloat *field, double value) except
 
 cdef inline int _set_point(Constraint self, cpVect *field, object value, str what) except -1:
     cdef cpVect v = _point_arg(value, what)
+    tamias_wait_constraint(self._constraint)
     cpConstraintActivateBodies(self._constraint)
     field[0] = v
     return 0
@@ -1379,6 +1382,7 @@ cdef class Constraint:
     @collide_bodies.setter
     def collide_bodies(self, collide_bodies):
         cdef bint v = bool(collide_bodies)
+        tamias_wait_constraint(self._constraint)
         cpConstraintActivateBodies(self._constraint)
         self._constraint.collideBodies = v
 
@@ -1401,6 +1405,7 @@ cdef class Constraint:
         >>> a, b = tamias2d.Body(1, 1), tamias2d.Body(1, 1)
         >>> tamias2d.PivotJoint(a, b, (0, 0)).activate_bodies()
         """
+        tamias_wait_constraint(self._constraint)
         cpConstraintActivateBodies(self._constraint)
 
     @property
@@ -1424,6 +1429,7 @@ cdef class Constraint:
     @pre_solve.setter
     def pre_solve(self, func):
         _check_callable(func, "pre_solve")
+        tamias_wait_constraint(self._constraint)
         self._pre_solve_func = func
         _install_solve_funcs(self)
 
@@ -1446,6 +1452,7 @@ cdef class Constraint:
     @post_solve.setter
     def post_solve(self, func):
         _check_callable(func, "post_solve")
+        tamias_wait_constraint(self._constraint)
         self._post_solve_func = func
         _install_solve_funcs(self)
 
@@ -1796,6 +1803,7 @@ cdef class GrooveJoint(Constraint):
     @groove_a.setter
     def groove_a(self, groove):
         cdef cpVect v = _point_arg(groove, "groove_a")
+        tamias_wait_constraint(self._constraint)
         cpConstraintActivateBodies(self._constraint)
         self._joint.grv_a = v
         self._joint.grv_n = cpvperp(cpvnormalize(cpvsub(self._joint.grv_b, v)))
@@ -1814,6 +1822,7 @@ cdef class GrooveJoint(Constraint):
     @groove_b.setter
     def groove_b(self, groove):
         cdef cpVect v = _point_arg(groove, "groove_b")
+        tamias_wait_constraint(self._constraint)
         cpConstraintActivateBodies(self._constraint)
         self._joint.grv_b = v
         self._joint.grv_n = cpvperp(cpvnormalize(cpvsub(v, self._joint.grv_a)))
@@ -1978,6 +1987,7 @@ cdef class DampedSpring(Constraint):
             self._joint.springForceFunc = _spring_force_trampoline
         else:
             raise TypeError(f"force_func must be callable, not {type(func).__name__}")
+        tamias_wait_constraint(self._constraint)
         cpConstraintActivateBodies(self._constraint)
 
 
@@ -2103,6 +2113,7 @@ cdef class DampedRotarySpring(Constraint):
             self._joint.springTorqueFunc = _spring_torque_trampoline
         else:
             raise TypeError(f"torque_func must be callable, not {type(func).__name__}")
+        tamias_wait_constraint(self._constraint)
         cpConstraintActivateBodies(self._constraint)
 
 
@@ -2298,6 +2309,7 @@ cdef class GearJoint(Constraint):
     @ratio.setter
     def ratio(self, ratio):
         cdef double v = _divisor_arg(ratio, "ratio")
+        tamias_wait_constraint(self._constraint)
         cpConstraintActivateBodies(self._constraint)
         self._joint.ratio = v
         self._joint.ratio_inv = 1.0 / v
