@@ -1,15 +1,16 @@
-"""The broad phase: Munk2D's spatial index interface and its AABB tree.
+"""The broad phase: Munk2D's AABB tree, an implementation of the spatial index.
 
-A faithful port of cpSpatialIndex.c and of cpBBTree.c at Munk2D 47b0e6b (the
-tree pymunk 7.3 runs: explicit stacks instead of recursion, segment-query
-pruning when children are pushed). The order in which pairs are reported is
-what fixes the solver order of the whole engine, so every traversal keeps
-Munk2D's order: insertion by area cost (ties by proximity, then child A), new
-leaf at child A, depth-first A before B, pair lists head-inserted, leaves
-updated in hash-set order.
+A faithful port of cpBBTree.c at Munk2D 47b0e6b (the tree pymunk 7.3 runs:
+explicit stacks instead of recursion, segment-query pruning when children are
+pushed). The order in which pairs are reported is what fixes the solver order
+of the whole engine, so every traversal keeps Munk2D's order: insertion by
+area cost (ties by proximity, then child A), new leaf at child A, depth-first
+A before B, pair lists head-inserted, leaves updated in hash-set order.
 
-``_TestTree`` is a test-only wrapper over a static and a dynamic tree holding
-plain boxes; the engine uses the C functions of ``_bbtree.pxd``.
+The tree plugs into the interface of ``_spatialindex`` (cpSpatialIndex.c/.h),
+through which the space calls it; the engine uses the C functions of
+``_bbtree.pxd``. ``_TestTree`` is a test-only wrapper over a static and a
+dynamic tree holding plain boxes.
 """
 from libc.stdlib cimport free, qsort
 from libc.string cimport memcpy
@@ -22,59 +23,16 @@ from tamias2d._containers cimport (cpcalloc, cprealloc, cpSetOutOfMemory,
     cpTakeOutOfMemory, cpArrayNew, cpArrayFree, cpArrayPush, cpHashSetNew,
     cpHashSetFree, cpHashSetInsert, cpHashSetRemove, cpHashSetFind, cpHashSetCount,
     cpHashSetEach)
+from tamias2d._spatialindex cimport (cpSpatialIndexInit, cpSpatialIndexCollideStatic,
+    cpSpatialIndexFree, cpSpatialIndexCount, cpSpatialIndexEach, cpSpatialIndexContains,
+    cpSpatialIndexInsert, cpSpatialIndexRemove, cpSpatialIndexReindex,
+    cpSpatialIndexReindexObject, cpSpatialIndexReindexQuery, cpSpatialIndexQuery,
+    cpSpatialIndexSegmentQuery)
 from tamias2d._structs cimport (cpHashSetEqlFunc, cpHashSetTransFunc, cpHashSetIteratorFunc,
     cpSpatialIndexDestroyImpl, cpSpatialIndexCountImpl, cpSpatialIndexEachImpl,
     cpSpatialIndexContainsImpl, cpSpatialIndexInsertImpl, cpSpatialIndexRemoveImpl,
     cpSpatialIndexReindexImpl, cpSpatialIndexReindexObjectImpl,
     cpSpatialIndexReindexQueryImpl, cpSpatialIndexQueryImpl, cpSpatialIndexSegmentQueryImpl)
-
-
-# -- cpSpatialIndex.c ---------------------------------------------------------------
-cdef void cpSpatialIndexFree(cpSpatialIndex *index) noexcept nogil:
-    if index != NULL:
-        cpSpatialIndexDestroy(index)
-        free(index)
-
-
-cdef cpSpatialIndex *cpSpatialIndexInit(cpSpatialIndex *index, cpSpatialIndexClass *klass,
-                                        cpSpatialIndexBBFunc bbfunc,
-                                        cpSpatialIndex *staticIndex) noexcept nogil:
-    # Munk2D hard-asserts that a static index has one dynamic partner at most;
-    # here the misuse returns NULL and links nothing.
-    if staticIndex != NULL and staticIndex.dynamicIndex != NULL:
-        return NULL
-    index.klass = klass
-    index.bbfunc = bbfunc
-    index.staticIndex = staticIndex
-    if staticIndex != NULL:
-        staticIndex.dynamicIndex = index
-    return index
-
-
-cdef struct DynamicToStaticContext:
-    cpSpatialIndexBBFunc bbfunc
-    cpSpatialIndex *staticIndex
-    cpSpatialIndexQueryFunc queryFunc
-    void *data
-
-
-cdef void dynamicToStaticIter(void *obj, void *data) noexcept nogil:
-    cdef DynamicToStaticContext *context = <DynamicToStaticContext *>data
-    cpSpatialIndexQuery(context.staticIndex, obj, context.bbfunc(obj), context.queryFunc,
-                        context.data)
-
-
-cdef void cpSpatialIndexCollideStatic(cpSpatialIndex *dynamicIndex, cpSpatialIndex *staticIndex,
-                                      cpSpatialIndexQueryFunc func, void *data) noexcept nogil:
-    # Used when the static index is not a tree (the spatial hash): every
-    # dynamic object queries the static index with its own box.
-    cdef DynamicToStaticContext context
-    if staticIndex != NULL and cpSpatialIndexCount(staticIndex) > 0:
-        context.bbfunc = dynamicIndex.bbfunc
-        context.staticIndex = staticIndex
-        context.queryFunc = func
-        context.data = data
-        cpSpatialIndexEach(dynamicIndex, dynamicToStaticIter, &context)
 
 
 # -- explicit traversal stack (47b0e6b) -----------------------------------------------

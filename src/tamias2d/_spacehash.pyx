@@ -24,8 +24,8 @@ from tamias2d._containers cimport (cpcalloc, cpSetOutOfMemory, cpArrayNew, cpArr
     cpHashSetRemove, cpHashSetFind, cpHashSetCount, cpHashSetEach)
 from tamias2d._structs cimport (cpSpatialIndexIteratorFunc, cpSpatialIndexQueryFunc,
     cpSpatialIndexSegmentQueryFunc)
-from tamias2d._bbtree cimport (cpSpatialIndexInit, cpSpatialIndexCollideStatic,
-    _tamias_set_test_hash_factory)
+from tamias2d._spatialindex cimport cpSpatialIndexInit, cpSpatialIndexCollideStatic
+from tamias2d._bbtree cimport _tamias_set_test_hash_factory
 
 
 cdef cpSpatialIndexClass klass
