@@ -72,10 +72,3 @@ cdef void cpBBTreeOptimize(cpSpatialIndex *index) noexcept nogil
 cdef void cpBBTreeSetVelocityFunc(cpSpatialIndex *index, cpBBTreeVelocityFunc func) noexcept nogil
 # The tree class table (what GetTree compares klass against).
 cdef cpSpatialIndexClass *cpBBTreeClass() noexcept nogil
-
-# -- test support ------------------------------------------------------------------------
-# _spacehash installs its constructor here at import, so the test-only
-# _TestTree can run over a spatial hash without a cimport cycle.
-ctypedef cpSpatialIndex *(*TamiasTestHashFactory)(cpFloat celldim, int cells,
-        cpSpatialIndexBBFunc bbfunc, cpSpatialIndex *staticIndex) noexcept nogil
-cdef void _tamias_set_test_hash_factory(TamiasTestHashFactory factory) noexcept nogil
