@@ -1,8 +1,8 @@
 """Tests of tamias2d._bbtree, the broad phase (Munk2D's cpBBTree at 47b0e6b).
 
 The tree is not part of pymunk's API, so these tests drive it through the
-test-only wrapper ``_TestTree`` (a static tree and a dynamic tree linked to
-it, holding plain boxes). They check:
+test-only wrapper ``tamias2d._testing._TestTree`` (a static tree and a dynamic
+tree linked to it, holding plain boxes). They check:
   * invariants: every overlapping pair reported exactly once per broad phase,
     queries equal to brute force, removal, tree consistency, deep trees;
   * Munk2D's documented rules: fattening with 0.1f, new leaf at child A, the
@@ -17,9 +17,8 @@ import struct
 
 import pytest
 
-_bbtree = pytest.importorskip("tamias2d._bbtree")
-_containers = pytest.importorskip("tamias2d._containers")
-_TestTree = _bbtree._TestTree
+_testing = pytest.importorskip("tamias2d._testing")
+_TestTree = _testing._TestTree
 
 F01 = struct.unpack("f", struct.pack("f", 0.1))[0]     # the C literal 0.1f
 INF = float("inf")
@@ -27,11 +26,11 @@ INF = float("inf")
 
 @pytest.fixture(autouse=True)
 def _no_leftover_failures():
-    _containers._set_alloc_failure(-1)
-    _containers._take_out_of_memory()
+    _testing._set_alloc_failure(-1)
+    _testing._take_out_of_memory()
     yield
-    _containers._set_alloc_failure(-1)
-    assert not _containers._take_out_of_memory()
+    _testing._set_alloc_failure(-1)
+    assert not _testing._take_out_of_memory()
 
 
 def intersects(a, b):
@@ -458,16 +457,16 @@ def test_insert_out_of_memory_leaves_tree_unchanged():
     for after in range(3):
         t = _TestTree()
         # The first insert allocates the node block, then the bin block.
-        _containers._set_alloc_failure(after, 1000)
+        _testing._set_alloc_failure(after, 1000)
         if after < 2:
             with pytest.raises(MemoryError):
                 t.add((10, 10, 11, 11))
-            _containers._set_alloc_failure(-1)
+            _testing._set_alloc_failure(-1)
             assert t.count() == 0 and t.structure() is None
             t.insert(0)
         else:
             t.add((10, 10, 11, 11))
-            _containers._set_alloc_failure(-1)
+            _testing._set_alloc_failure(-1)
         assert t.count() == 1 and t.check() == 1
         t.add((10.5, 10, 11, 11))
         assert t.count() == 2 and t.check() == 2
@@ -479,7 +478,7 @@ def test_pair_pool_out_of_memory_is_reported():
     t.add((0, 0, 1, 1))
     # The second insert takes nodes and a bin from the pools; its pair needs
     # the first pair block, which fails.
-    _containers._set_alloc_failure(0)
+    _testing._set_alloc_failure(0)
     with pytest.raises(MemoryError):
         t.add((0.5, 0.5, 2, 2))
     assert t.count() == 2 and t.check() == 2
@@ -488,23 +487,23 @@ def test_pair_pool_out_of_memory_is_reported():
 
 def test_tree_creation_out_of_memory():
     for after in range(8):
-        _containers._set_alloc_failure(after)
+        _testing._set_alloc_failure(after)
         try:
             _TestTree()
         except MemoryError:
             pass
-        _containers._set_alloc_failure(-1)
-        _containers._take_out_of_memory()
+        _testing._set_alloc_failure(-1)
+        _testing._take_out_of_memory()
 
 
 def test_deep_traversal_stack_out_of_memory_is_flagged():
     t = _TestTree(fatten=False)
     for k in range(1, 200):
         t.add((-k, -k, k, k))
-    _containers._set_alloc_failure(0, 1000)
+    _testing._set_alloc_failure(0, 1000)
     hits = t.query((-0.5, -0.5, 0.5, 0.5))
-    _containers._set_alloc_failure(-1)
-    assert _containers._take_out_of_memory()
+    _testing._set_alloc_failure(-1)
+    assert _testing._take_out_of_memory()
     assert len(hits) < 199                   # incomplete, but no crash
     assert sorted(t.query((-0.5, -0.5, 0.5, 0.5))) == list(range(199))
 
@@ -659,7 +658,7 @@ def cells_of(bb, dim, n):
 def test_spatial_hash_reports_each_pair_sharing_a_bucket_once(seed, dim, cells):
     rng = random.Random(500 + seed)
     t = _TestTree(spatial_hash=(dim, cells))
-    n = _containers._next_prime(cells)
+    n = _testing._next_prime(cells)
     live, boxes = {}, {}
     for step in range(80):
         r = rng.random()

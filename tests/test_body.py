@@ -388,7 +388,7 @@ def test_update_functions_type_checks():
 
 
 def test_velocity_func_and_position_func_arguments():
-    from tamias2d.body import _run_position_func, _run_velocity_func
+    from tamias2d._testing import _run_position_func, _run_velocity_func
     calls = []
 
     def vf(body, gravity, damping, dt):
@@ -424,7 +424,7 @@ def test_velocity_func_and_position_func_arguments():
 
 def test_python_integrator_matches_pymunk_defaults():
     # A Python velocity_func that calls the default must give pymunk's numbers.
-    from tamias2d.body import _run_position_func, _run_velocity_func
+    from tamias2d._testing import _run_position_func, _run_velocity_func
     rng = random.Random(99)
     tb, pb = random_pair(rng)
     tb.velocity_func = lambda b, g, d, dt: Body.update_velocity(b, g, d, dt)
@@ -439,7 +439,7 @@ def test_python_integrator_matches_pymunk_defaults():
 
 
 def test_integrator_exception_without_space_is_unraisable(monkeypatch):
-    from tamias2d.body import _run_velocity_func
+    from tamias2d._testing import _run_velocity_func
     seen = []
     monkeypatch.setattr(sys, "unraisablehook", lambda info: seen.append(info))
 
@@ -648,8 +648,9 @@ def _docstring_owners():
         doc = getattr(obj, "__doc__", None)
         if doc and ">>>" in doc:
             yield "tamias2d.body.Body." + name, obj
+    from tamias2d import _testing
     for name in ("_run_velocity_func", "_run_position_func"):
-        yield "tamias2d.body." + name, getattr(m, name)
+        yield "tamias2d._testing." + name, getattr(_testing, name)
 
 
 def test_doctests():

@@ -12,6 +12,7 @@ import pytest
 
 import tamias2d
 from tamias2d import collision
+from tamias2d import _testing
 from tamias2d.collision import (ContactPoint, ContactPointSet, shapes_collide,
     relative_velocity, normal_relative_velocity, apply_impulse, apply_impulses,
     apply_bias_impulse, apply_bias_impulses, k_scalar_body, k_scalar)
@@ -216,7 +217,7 @@ def test_collide_swaps_sorted_types_and_hashes():
     box = tamias2d.Poly.create_box(body_at(0, 0), (2, 2))
     circle = tamias2d.Circle(body_at(0, 1.5), 1)
     cached(box, circle)
-    a_first, cid, n, contacts = collision._collide(box, circle)
+    a_first, cid, n, contacts = _testing._collide(box, circle)
     assert a_first is False                   # circle (type 0) goes first
     assert tuple(n) == (0.0, -1.0)            # from the circle to the box
     assert len(contacts) == 1 and contacts[0][2] == 0   # circle contacts hash 0
@@ -224,7 +225,7 @@ def test_collide_swaps_sorted_types_and_hashes():
     a = tamias2d.Poly.create_box(body_at(0, 0), (2, 2))
     b = tamias2d.Poly.create_box(body_at(0, 1.5), (2, 2))
     cached(a, b)
-    _, cid, n, contacts = collision._collide(a, b)
+    _, cid, n, contacts = _testing._collide(a, b)
     assert len(contacts) == 2
     hashes = [h for _, _, h in contacts]
     assert all(h != 0 for h in hashes) and hashes[0] != hashes[1]
@@ -237,8 +238,8 @@ def test_warm_start_gives_the_same_contacts():
     a = tamias2d.Poly(body_at(0, 0), [(-1, -1), (1, -1), (1.2, 1), (-1, 1.1)])
     b = tamias2d.Poly(body_at(0.3, 2.05, 0.2), [(-1, -1), (1, -1), (0, 1)])
     cached(a, b)
-    cold = collision._collide(a, b, 0)
-    warm = collision._collide(a, b, cold[1])
+    cold = _testing._collide(a, b, 0)
+    warm = _testing._collide(a, b, cold[1])
     assert warm[1:] == cold[1:]
 
 
@@ -249,9 +250,9 @@ def test_unsorted_table_slots_raise_collision_error():
     poly = tamias2d.Poly.create_box(body, (1, 1))
     for a, b in ((seg, circle), (poly, circle), (poly, seg)):
         with pytest.raises(CollisionError):
-            collision._collision_table_call(a, b)
+            _testing._collision_table_call(a, b)
     # The sorted slots work.
-    assert collision._collision_table_call(circle, poly) >= 0
+    assert _testing._collision_table_call(circle, poly) >= 0
     assert issubclass(CollisionError, Tamias2DError)
 
 
@@ -382,12 +383,12 @@ def test_bias_impulses_touch_only_bias_velocities():
     b = tamias2d.Body(4, 4)
     apply_bias_impulses(a, b, (0, 1), (0, -1), (2, 0))
     assert tuple(a.velocity) == (0.0, 0.0) and a.angular_velocity == 0.0
-    va, wa = collision._bias_velocity(a)
-    vb, wb = collision._bias_velocity(b)
+    va, wa = _testing._bias_velocity(a)
+    vb, wb = _testing._bias_velocity(b)
     assert tuple(va) == (-1.0, 0.0) and wa == 1.0
     assert tuple(vb) == (0.5, 0.0) and wb == 0.5
     apply_bias_impulse(a, (2, 0), (0, 1))      # undoes a's part
-    va, wa = collision._bias_velocity(a)
+    va, wa = _testing._bias_velocity(a)
     assert tuple(va) == (0.0, 0.0) and wa == 0.0
 
 
@@ -428,7 +429,7 @@ def test_contact_point_classes():
 
 def test_collide_loop_helper():
     a, b = cached(tamias2d.Circle(body_at(0, 0), 1), tamias2d.Circle(body_at(1, 0), 1))
-    assert collision._collide_loop([(a, b), (b, a)], 5) == 10
+    assert _testing._collide_loop([(a, b), (b, a)], 5) == 10
 
 
 # -- doctests ------------------------------------------------------------------------------------------
@@ -443,6 +444,11 @@ def test_doctests():
         if callable(obj) and doc and ">>>" in doc and getattr(obj, "__module__", None) == collision.__name__:
             runner.run(parser.get_doctest(doc, dict(vars(collision)), "tamias2d.collision." + name, None, 0))
             n += 1
+    # The narrow-phase test hooks live in tamias2d._testing.
+    for name in ("_bias_velocity", "_collide", "_collision_table_call", "_collide_loop"):
+        doc = getattr(_testing, name).__doc__
+        runner.run(parser.get_doctest(doc, dict(vars(_testing)), "tamias2d._testing." + name, None, 0))
+        n += 1
     assert runner.summarize(verbose=False).failed == 0
     assert n >= 15
 

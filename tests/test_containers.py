@@ -10,9 +10,9 @@ import random
 
 import pytest
 
-_containers = pytest.importorskip("tamias2d._containers")
-_TestArray = _containers._TestArray
-_TestHashSet = _containers._TestHashSet
+_testing = pytest.importorskip("tamias2d._testing")
+_TestArray = _testing._TestArray
+_TestHashSet = _testing._TestHashSet
 
 PRIMES = [5, 13, 23, 47, 97, 193, 389, 769, 1543, 3079, 6151, 12289, 24593, 49157,
           98317, 196613, 393241, 786433, 1572869, 3145739, 6291469, 12582917,
@@ -21,11 +21,11 @@ PRIMES = [5, 13, 23, 47, 97, 193, 389, 769, 1543, 3079, 6151, 12289, 24593, 4915
 
 @pytest.fixture(autouse=True)
 def _no_leftover_failures():
-    _containers._set_alloc_failure(-1)
-    _containers._take_out_of_memory()
+    _testing._set_alloc_failure(-1)
+    _testing._take_out_of_memory()
     yield
-    _containers._set_alloc_failure(-1)
-    assert not _containers._take_out_of_memory()
+    _testing._set_alloc_failure(-1)
+    assert not _testing._take_out_of_memory()
 
 
 # -- cpArray --------------------------------------------------------------------------
@@ -126,7 +126,7 @@ def test_array_push_out_of_memory_leaves_array_unchanged():
     a = _TestArray()
     for i in range(1, 5):
         a.push(i)
-    _containers._set_alloc_failure(0)     # the growth realloc fails
+    _testing._set_alloc_failure(0)     # the growth realloc fails
     with pytest.raises(MemoryError):
         a.push(5)
     assert a.to_list() == [1, 2, 3, 4] and a.max == 4
@@ -135,23 +135,23 @@ def test_array_push_out_of_memory_leaves_array_unchanged():
 
 
 def test_array_new_out_of_memory():
-    _containers._set_alloc_failure(0)
+    _testing._set_alloc_failure(0)
     with pytest.raises(MemoryError):
         _TestArray()
-    _containers._set_alloc_failure(1)     # the element storage fails
+    _testing._set_alloc_failure(1)     # the element storage fails
     with pytest.raises(MemoryError):
         _TestArray()
 
 
 # -- prime.h ----------------------------------------------------------------------------
 def test_next_prime_table():
-    assert [_containers._next_prime(p) for p in PRIMES] == PRIMES
-    assert _containers._next_prime(0) == 5
-    assert _containers._next_prime(-3) == 5
-    assert _containers._next_prime(6) == 13
-    assert _containers._next_prime(1543) == 1543
-    assert _containers._next_prime(1544) == 3079
-    assert _containers._next_prime(1610612742) == 0    # past the table
+    assert [_testing._next_prime(p) for p in PRIMES] == PRIMES
+    assert _testing._next_prime(0) == 5
+    assert _testing._next_prime(-3) == 5
+    assert _testing._next_prime(6) == 13
+    assert _testing._next_prime(1543) == 1543
+    assert _testing._next_prime(1544) == 3079
+    assert _testing._next_prime(1610612742) == 0    # past the table
 
 
 # -- cpHashSet ----------------------------------------------------------------------------
@@ -324,11 +324,11 @@ def test_hash_set_bins_pooled_in_32k_blocks():
 
 
 def test_hash_set_out_of_memory():
-    _containers._set_alloc_failure(0)
+    _testing._set_alloc_failure(0)
     with pytest.raises(MemoryError):
         _TestHashSet()
     s = _TestHashSet()
-    _containers._set_alloc_failure(0)     # the first bin block
+    _testing._set_alloc_failure(0)     # the first bin block
     with pytest.raises(MemoryError):
         s.insert(1, 1)
     assert s.count == 0 and s.items() == []
@@ -340,9 +340,9 @@ def test_hash_set_failed_resize_keeps_working():
     s = _TestHashSet()
     for k in range(1, 5):
         s.insert(k, k)
-    _containers._set_alloc_failure(0)     # the new table of the resize fails
+    _testing._set_alloc_failure(0)     # the new table of the resize fails
     s.insert(5, 5)
-    assert _containers._take_out_of_memory()
+    assert _testing._take_out_of_memory()
     assert s.size == 5 and s.count == 5
     assert sorted(s.items()) == [1, 2, 3, 4, 5]
     s.insert(6, 6)                        # next insert resizes normally

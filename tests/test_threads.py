@@ -14,7 +14,7 @@ import pytest
 
 import tamias2d
 import tamias2d.batch
-from tamias2d import _containers
+from tamias2d import _testing
 
 import scenes
 
@@ -113,7 +113,7 @@ def test_out_of_memory_state_is_per_thread():
     done_main = threading.Event()
 
     def worker():
-        _containers._set_alloc_failure(0)       # this thread's next allocation fails
+        _testing._set_alloc_failure(0)       # this thread's next allocation fails
         armed.set()
         done_main.wait(10)
         try:
@@ -121,8 +121,8 @@ def test_out_of_memory_state_is_per_thread():
         except MemoryError:
             result["worker"] = "MemoryError"
         finally:
-            _containers._set_alloc_failure(-1)
-        result["worker flag"] = _containers._take_out_of_memory()
+            _testing._set_alloc_failure(-1)
+        result["worker flag"] = _testing._take_out_of_memory()
 
     t = threading.Thread(target=worker)
     t.start()
@@ -135,7 +135,7 @@ def test_out_of_memory_state_is_per_thread():
         done_main.set()
         t.join()
     assert result == {"main": "ok", "worker": "MemoryError", "worker flag": False}
-    assert not _containers._take_out_of_memory()
+    assert not _testing._take_out_of_memory()
 
 
 # -- one space, two threads ------------------------------------------------------------------

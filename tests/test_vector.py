@@ -24,6 +24,7 @@ from pymunk.transform import Transform as PTransform
 import tamias2d
 from tamias2d import Vec2d, BB, Transform
 from tamias2d import vector as tvector
+from tamias2d import _testing
 from tamias2d.errors import IllegalVector
 
 SETTINGS = settings(max_examples=150, derandomize=True, deadline=None,
@@ -340,14 +341,14 @@ def test_cpv_from_object_accepts_2_sequences(xy):
     x, y = xy
     expect = Vec2d(float(x), float(y))
     for o in (Vec2d(x, y), (x, y), [x, y], np.array([x, y]), np.array([[x, y]])[0]):
-        assert_same(tvector._cpv_roundtrip(o), expect)
+        assert_same(_testing._cpv_roundtrip(o), expect)
 
 
 def test_cpv_from_object_conversions():
-    assert_same(tvector._cpv_roundtrip((1, True)), Vec2d(1.0, 1.0))
-    assert_same(tvector._cpv_roundtrip(np.array([3, 4], dtype=np.int32)), Vec2d(3.0, 4.0))
-    assert_same(tvector._cpv_roundtrip((np.float32(0.1), 2)), Vec2d(float(np.float32(0.1)), 2.0))
-    nan = tvector._cpv_roundtrip((math.nan, -math.inf))
+    assert_same(_testing._cpv_roundtrip((1, True)), Vec2d(1.0, 1.0))
+    assert_same(_testing._cpv_roundtrip(np.array([3, 4], dtype=np.int32)), Vec2d(3.0, 4.0))
+    assert_same(_testing._cpv_roundtrip((np.float32(0.1), 2)), Vec2d(float(np.float32(0.1)), 2.0))
+    nan = _testing._cpv_roundtrip((math.nan, -math.inf))
     assert math.isnan(nan.x) and nan.y == -math.inf
 
 
@@ -360,33 +361,33 @@ def test_cpv_from_object_conversions():
 ])
 def test_cpv_from_object_rejects(bad, exc):
     with pytest.raises(exc) as info:
-        tvector._cpv_roundtrip(bad)
+        _testing._cpv_roundtrip(bad)
     assert str(info.value)
 
 
 def test_cpv_from_object_finite():
-    assert_same(tvector._cpv_finite_roundtrip((1, 2), "gravity"), Vec2d(1.0, 2.0))
+    assert_same(_testing._cpv_finite_roundtrip((1, 2), "gravity"), Vec2d(1.0, 2.0))
     for bad in ((math.nan, 0), (0, math.inf), (-math.inf, 1), [0, math.nan]):
         with pytest.raises(IllegalVector, match="gravity must be finite") as info:
-            tvector._cpv_finite_roundtrip(bad, "gravity")
+            _testing._cpv_finite_roundtrip(bad, "gravity")
         assert isinstance(info.value, ValueError)
     with pytest.raises(IllegalVector, match="position"):
-        tvector._cpv_finite_roundtrip((1, 2, 3), "position")
+        _testing._cpv_finite_roundtrip((1, 2, 3), "position")
     with pytest.raises(TypeError, match="position"):
-        tvector._cpv_finite_roundtrip(None, "position")
+        _testing._cpv_finite_roundtrip(None, "position")
 
 
 def test_bb_and_transform_conversions():
-    assert_same(tvector._cpbb_roundtrip(BB(1, 2, 3, 4)), BB(1.0, 2.0, 3.0, 4.0))
-    assert_same(tvector._cpbb_roundtrip(np.arange(4)), BB(0.0, 1.0, 2.0, 3.0))
-    assert_same(tvector._cptransform_roundtrip([1, 2, 3, 4, 5, 6]),
+    assert_same(_testing._cpbb_roundtrip(BB(1, 2, 3, 4)), BB(1.0, 2.0, 3.0, 4.0))
+    assert_same(_testing._cpbb_roundtrip(np.arange(4)), BB(0.0, 1.0, 2.0, 3.0))
+    assert_same(_testing._cptransform_roundtrip([1, 2, 3, 4, 5, 6]),
                 Transform(1.0, 2.0, 3.0, 4.0, 5.0, 6.0))
     with pytest.raises(IllegalVector):
-        tvector._cpbb_roundtrip((1, 2, 3))
+        _testing._cpbb_roundtrip((1, 2, 3))
     with pytest.raises(IllegalVector):
-        tvector._cptransform_roundtrip(BB())
+        _testing._cptransform_roundtrip(BB())
     with pytest.raises(TypeError):
-        tvector._cpbb_roundtrip((1, 2, 3, "x"))
+        _testing._cpbb_roundtrip((1, 2, 3, "x"))
 
 
 # -- BB -------------------------------------------------------------------------------
@@ -712,7 +713,7 @@ def _cp_result(x):
 
 
 def test_every_kernel_is_checked():
-    assert set(tvector._KERNELS) == (set(KERNEL_REFERENCES) | set(BB_KERNELS)
+    assert set(_testing._KERNELS) == (set(KERNEL_REFERENCES) | set(BB_KERNELS)
                                      | {"cpvzero", "VECT_ERR"})
 
 
@@ -722,7 +723,7 @@ def test_every_kernel_is_checked():
 def test_kernel_matches_c_expression(name, data):
     kinds, ref = KERNEL_REFERENCES[name]
     args = _args(data.draw, kinds)
-    ours = _as_plain(tvector._kernel(name, *args))
+    ours = _as_plain(_testing._kernel(name, *args))
     expected = ref(*args)
     if isinstance(expected, bool):
         assert ours is expected, f"{name}{tuple(args)}"
@@ -735,7 +736,7 @@ def test_kernel_matches_c_expression(name, data):
 @given(data=st.data())
 def test_bb_kernel_matches_chipmunk(name, data):
     args = _args(data.draw, BB_KERNELS[name])
-    ours = _as_plain(tvector._kernel(name, *args))
+    ours = _as_plain(_testing._kernel(name, *args))
     theirs = _cp_result(getattr(cp_lib, name)(*args))
     if isinstance(ours, bool):
         assert ours == bool(theirs), f"{name}{tuple(args)}"
@@ -744,9 +745,9 @@ def test_bb_kernel_matches_chipmunk(name, data):
 
 
 def test_mis_constants():
-    zero, err, pi = tvector._mis_constants()
+    zero, err, pi = _testing._mis_constants()
     assert_same(zero, Vec2d(0.0, 0.0))
     assert_same(err, Vec2d(2147483647.0, -2147483648.0))
     assert pi == math.pi
-    assert_same(tvector._kernel("cpvzero"), Vec2d(0.0, 0.0))
-    assert_same(tvector._kernel("VECT_ERR"), err)
+    assert_same(_testing._kernel("cpvzero"), Vec2d(0.0, 0.0))
+    assert_same(_testing._kernel("VECT_ERR"), err)

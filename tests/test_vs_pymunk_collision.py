@@ -28,6 +28,7 @@ import pytest
 pymunk = pytest.importorskip("pymunk")
 tamias2d = pytest.importorskip("tamias2d")
 collision = pytest.importorskip("tamias2d.collision")
+_testing = pytest.importorskip("tamias2d._testing")
 from pymunk._chipmunk_cffi import lib as pm_lib  # noqa: E402
 
 # Some pairs reach the GJK/EPA iteration caps (a few random ones, and some
@@ -517,14 +518,14 @@ def test_warm_started_gjk_matches_pymunk_space():
         # arbiter's order, b moved to pymunk's position of each step.
         ta, tb = build_case(tamias2d, dict(case, pos_b=positions[0]))
         first, second = (tb, ta) if arb_shapes[0] is pb else (ta, tb)
-        _, cached_id, _, _ = collision._collide(first, second, 0)
+        _, cached_id, _, _ = _testing._collide(first, second, 0)
         tb.body.position = positions[1]
         tb.cache_bb()
-        _, cached_id, _, _ = collision._collide(first, second, cached_id)
+        _, cached_id, _, _ = _testing._collide(first, second, cached_id)
         tb.body.position = positions[2]
         tb.cache_bb()
-        a_first, _, normal, contacts = collision._collide(first, second, cached_id)
-        cold = collision._collide(first, second, 0)
+        a_first, _, normal, contacts = _testing._collide(first, second, cached_id)
+        cold = _testing._collide(first, second, 0)
         if repr(cold[2:]) != repr((normal, contacts)):
             warm_differs += 1
         # cpArbiterGetContactPointSet: points are body.p + (contact - body.p).

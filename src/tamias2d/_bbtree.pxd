@@ -1,11 +1,11 @@
-# Broad phase: the spatial index interface of Munk2D (cpSpatialIndex.h/.c)
-# and its default implementation, the bounding box tree (cpBBTree.c as of
-# Munk2D 47b0e6b, the version inside pymunk 7.3).
+# Broad phase: the bounding box tree of Munk2D (cpBBTree.c as of Munk2D
+# 47b0e6b, the version inside pymunk 7.3), the default implementation of the
+# spatial index interface of _spatialindex.pxd.
 #
 # The space uses two trees: a static one (exact boxes) and a dynamic one
 # linked to it (fattened boxes, pair cache). Every call to the space goes
-# through the cpSpatialIndex* dispatchers below, so the spatial hash
-# (_spacehash) can replace the trees.
+# through the cpSpatialIndex* dispatchers of _spatialindex.pxd, so the spatial
+# hash (_spacehash) can replace the trees.
 #
 # Out of memory: the class functions have no return path, so a failed
 # allocation raises the sticky flag of _containers (cpTakeOutOfMemory) and the
@@ -62,14 +62,6 @@ cdef struct Pair:
     Thread b
     cpCollisionID id                 # narrow-phase cache, handed back on replay
 
-# -- cpSpatialIndex.c -----------------------------------------------------------------
-cdef void cpSpatialIndexFree(cpSpatialIndex *index) noexcept nogil
-cdef cpSpatialIndex *cpSpatialIndexInit(cpSpatialIndex *index, cpSpatialIndexClass *klass,
-                                        cpSpatialIndexBBFunc bbfunc,
-                                        cpSpatialIndex *staticIndex) noexcept nogil
-cdef void cpSpatialIndexCollideStatic(cpSpatialIndex *dynamicIndex, cpSpatialIndex *staticIndex,
-                                      cpSpatialIndexQueryFunc func, void *data) noexcept nogil
-
 # -- cpBBTree.c -----------------------------------------------------------------------
 cdef cpBBTree *cpBBTreeAlloc() noexcept nogil
 # NULL when out of memory (the tree is then not allocated / left zeroed).
@@ -80,54 +72,3 @@ cdef void cpBBTreeOptimize(cpSpatialIndex *index) noexcept nogil
 cdef void cpBBTreeSetVelocityFunc(cpSpatialIndex *index, cpBBTreeVelocityFunc func) noexcept nogil
 # The tree class table (what GetTree compares klass against).
 cdef cpSpatialIndexClass *cpBBTreeClass() noexcept nogil
-
-# -- cpSpatialIndex.h dispatchers --------------------------------------------------------
-cdef inline void cpSpatialIndexDestroy(cpSpatialIndex *index) noexcept nogil:
-    if index.klass != NULL:
-        index.klass.destroy(index)
-
-cdef inline int cpSpatialIndexCount(cpSpatialIndex *index) noexcept nogil:
-    return index.klass.count(index)
-
-cdef inline void cpSpatialIndexEach(cpSpatialIndex *index, cpSpatialIndexIteratorFunc func,
-                                    void *data) noexcept nogil:
-    index.klass.each(index, func, data)
-
-cdef inline cpBool cpSpatialIndexContains(cpSpatialIndex *index, void *obj,
-                                          cpHashValue hashid) noexcept nogil:
-    return index.klass.contains(index, obj, hashid)
-
-cdef inline void cpSpatialIndexInsert(cpSpatialIndex *index, void *obj,
-                                      cpHashValue hashid) noexcept nogil:
-    index.klass.insert(index, obj, hashid)
-
-cdef inline void cpSpatialIndexRemove(cpSpatialIndex *index, void *obj,
-                                      cpHashValue hashid) noexcept nogil:
-    index.klass.remove(index, obj, hashid)
-
-cdef inline void cpSpatialIndexReindex(cpSpatialIndex *index) noexcept nogil:
-    index.klass.reindex(index)
-
-cdef inline void cpSpatialIndexReindexObject(cpSpatialIndex *index, void *obj,
-                                             cpHashValue hashid) noexcept nogil:
-    index.klass.reindexObject(index, obj, hashid)
-
-cdef inline void cpSpatialIndexQuery(cpSpatialIndex *index, void *obj, cpBB bb,
-                                     cpSpatialIndexQueryFunc func, void *data) noexcept nogil:
-    index.klass.query(index, obj, bb, func, data)
-
-cdef inline void cpSpatialIndexSegmentQuery(cpSpatialIndex *index, void *obj, cpVect a, cpVect b,
-                                            cpFloat t_exit, cpSpatialIndexSegmentQueryFunc func,
-                                            void *data) noexcept nogil:
-    index.klass.segmentQuery(index, obj, a, b, t_exit, func, data)
-
-cdef inline void cpSpatialIndexReindexQuery(cpSpatialIndex *index, cpSpatialIndexQueryFunc func,
-                                            void *data) noexcept nogil:
-    index.klass.reindexQuery(index, func, data)
-
-# -- test support ------------------------------------------------------------------------
-# _spacehash installs its constructor here at import, so the test-only
-# _TestTree can run over a spatial hash without a cimport cycle.
-ctypedef cpSpatialIndex *(*TamiasTestHashFactory)(cpFloat celldim, int cells,
-        cpSpatialIndexBBFunc bbfunc, cpSpatialIndex *staticIndex) noexcept nogil
-cdef void _tamias_set_test_hash_factory(TamiasTestHashFactory factory) noexcept nogil

@@ -9,7 +9,7 @@ from tamias2d._config cimport cpFloat, cpBool, cpCollisionID
 from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpShapeFilter, cpPointQueryInfo,
     cpSegmentQueryInfo, cpContactPointSet)
 from tamias2d._containers cimport cprealloc
-from tamias2d._bbtree cimport cpSpatialIndexQuery, cpSpatialIndexSegmentQuery
+from tamias2d._spatialindex cimport cpSpatialIndexQuery, cpSpatialIndexSegmentQuery
 from tamias2d.vector cimport cpVect, cpBB, cpv, cpfmax, cpBBIntersects, cpBBNewForCircle
 from tamias2d.shape cimport (cpShapeUpdate, cpShapeFilterReject, cpShapePointQuery,
     cpShapeSegmentQuery)

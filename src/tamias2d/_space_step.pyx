@@ -22,7 +22,7 @@ from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, 
     CP_ARBITER_STATE_IGNORE, CP_ARBITER_STATE_CACHED)
 from tamias2d._containers cimport (cpcalloc, cpfree, cpArrayPush, cpArrayPop,
     cpArrayDeleteObj, cpArrayContains, cpHashSetInsert, cpHashSetEach, cpHashSetFilter)
-from tamias2d._bbtree cimport (cpSpatialIndexEach, cpSpatialIndexInsert, cpSpatialIndexRemove,
+from tamias2d._spatialindex cimport (cpSpatialIndexEach, cpSpatialIndexInsert, cpSpatialIndexRemove,
     cpSpatialIndexReindexQuery)
 from tamias2d.vector cimport cpVect, cpvlengthsq, cpBBIntersects
 from tamias2d.body cimport (cpBodyActivate, cpBodyGetType, cpBodyIsSleeping,

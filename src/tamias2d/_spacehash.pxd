@@ -2,7 +2,7 @@
 # Space.use_spatial_hash(dim, count) puts in place of the two BB trees.
 # Objects are hashed into square cells of side `celldim` in a table of
 # next_prime(count) buckets; it plugs into the same cpSpatialIndex interface
-# (dispatchers in _bbtree.pxd).
+# as the tree (_spatialindex.pxd).
 from tamias2d._config cimport cpFloat, cpTimestamp
 from tamias2d._structs cimport (cpArray, cpHashSet, cpSpatialIndex, cpSpatialIndexClass,
     cpSpatialIndexBBFunc)

@@ -12,8 +12,9 @@ the dynamic objects with the static hash.
 Out of memory raises the sticky flag of _containers and leaves the operation
 incomplete (an object missing from some cells), never a crash.
 
-This module also installs its constructor as the factory the test-only
-``_bbtree._TestTree(spatial_hash=(dim, count))`` uses.
+The hash plugs into the interface of ``_spatialindex`` (cpSpatialIndex.c/.h),
+as the tree of ``_bbtree`` does; it does not depend on the tree. The tests
+drive it through ``_testing._TestTree(spatial_hash=(dim, count))``.
 """
 from libc.stdlib cimport free
 from libc.math cimport floor, INFINITY
@@ -24,8 +25,7 @@ from tamias2d._containers cimport (cpcalloc, cpSetOutOfMemory, cpArrayNew, cpArr
     cpHashSetRemove, cpHashSetFind, cpHashSetCount, cpHashSetEach)
 from tamias2d._structs cimport (cpSpatialIndexIteratorFunc, cpSpatialIndexQueryFunc,
     cpSpatialIndexSegmentQueryFunc)
-from tamias2d._bbtree cimport (cpSpatialIndexInit, cpSpatialIndexCollideStatic,
-    _tamias_set_test_hash_factory)
+from tamias2d._spatialindex cimport cpSpatialIndexInit, cpSpatialIndexCollideStatic
 
 
 cdef cpSpatialIndexClass klass
@@ -525,5 +525,3 @@ klass.reindexObject = cpSpaceHashRehashObject
 klass.reindexQuery = cpSpaceHashReindexQuery
 klass.query = cpSpaceHashQuery
 klass.segmentQuery = cpSpaceHashSegmentQuery
-
-_tamias_set_test_hash_factory(cpSpaceHashNew)

@@ -2,7 +2,7 @@
 # them: bodies, shapes, arbiters and the space point at each other, so their
 # definitions cannot live in separate modules. Field names follow Munk2D so the
 # port can be read beside its source. Functions live in the module of their
-# struct (body.pxd, shape.pxd, collision.pxd, space.pxd, _bbtree.pxd, ...).
+# struct (body.pxd, shape.pxd, collision.pxd, space.pxd, _spatialindex.pxd, ...).
 from tamias2d._config cimport (cpFloat, cpHashValue, cpCollisionID, cpBool,
     cpDataPointer, cpCollisionType, cpGroup, cpBitmask, cpTimestamp,
     CP_MAX_CONTACTS_PER_ARBITER, CP_POLY_SHAPE_INLINE_ALLOC)
@@ -279,7 +279,7 @@ cdef struct cpConstraint:
     cpConstraintPostSolveFunc postSolve
     cpDataPointer userData
 
-# -- spatial index interface (cpSpatialIndex.h; the BB tree is in _bbtree.pxd) --
+# -- spatial index interface (cpSpatialIndex.h; dispatchers in _spatialindex.pxd) --
 ctypedef cpBB (*cpSpatialIndexBBFunc)(void *obj) noexcept nogil
 ctypedef void (*cpSpatialIndexIteratorFunc)(void *obj, void *data) noexcept nogil
 ctypedef cpCollisionID (*cpSpatialIndexQueryFunc)(void *obj1, void *obj2, cpCollisionID id, void *data) noexcept nogil

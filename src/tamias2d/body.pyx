@@ -1,7 +1,10 @@
 # Rigid Body module (MIS section 6): the C body of Munk2D's cpBody.c and the
 # body half of cpSpaceComponent.c, then the Python Body with pymunk 7.3's API.
 # Arithmetic keeps the C association exactly, so results match pymunk bit for
-# bit; see munk2d-inventory.md, group 4.
+# bit; see munk2d-inventory.md, group 4. The test hooks that run the integrators
+# through the C function pointers (_run_velocity_func, _run_position_func) are
+# in _testing.
+import copyreg
 import weakref
 
 from tamias2d._weakkeysview import WeakKeysView
@@ -1343,32 +1346,3 @@ cdef class Body:
 # func setters' "restore the default" test.
 cdef object _default_update_velocity = Body.update_velocity
 cdef object _default_update_position = Body.update_position
-
-
-# -- test helpers: run the integrators through the C function pointers -----------
-def _run_velocity_func(Body body not None, gravity, double damping, double dt):
-    """Call the body's velocity integrator the way a step does (for tests).
-
-    >>> import tamias2d
-    >>> from tamias2d.body import _run_velocity_func
-    >>> b = tamias2d.Body(1, 1)
-    >>> _run_velocity_func(b, (0, -10), 1.0, 0.1)
-    >>> b.velocity
-    Vec2d(0.0, -1.0)
-    """
-    cdef cpVect g = cpv_from_object(gravity)
-    body._body.velocity_func(&body._body, g, damping, dt)
-
-
-def _run_position_func(Body body not None, double dt):
-    """Call the body's position integrator the way a step does (for tests).
-
-    >>> import tamias2d
-    >>> from tamias2d.body import _run_position_func
-    >>> b = tamias2d.Body(1, 1)
-    >>> b.velocity = 1, 0
-    >>> _run_position_func(b, 0.5)
-    >>> b.position
-    Vec2d(0.5, 0.0)
-    """
-    body._body.position_func(&body._body, dt)

@@ -33,6 +33,17 @@ cdef cpCollisionInfo cpCollide(const cpShape *a, const cpShape *b, cpCollisionID
 # Contact points of two shapes oriented a -> b, as the query API reports them.
 cdef cpContactPointSet cpShapesCollide(const cpShape *a, const cpShape *b) noexcept nogil
 
+# The collision table, indexed by a.type + b.type*CP_NUM_SHAPES; only the slots
+# with a.type <= b.type collide, the others raise the UNSORTED flag. cpCollide
+# sorts the pair before indexing it; the table is exported for the tests of
+# the unsorted slots (_testing._collision_table_call).
+ctypedef void (*CollisionFunc)(const cpShape *a, const cpShape *b, cpCollisionInfo *info) noexcept nogil
+cdef CollisionFunc CollisionFuncs[9]
+
+# The C shape of a Python Circle/Segment/Poly; TypeError/ValueError (and NULL)
+# for anything else, a bare Shape or a polygon without vertices.
+cdef const cpShape *shape_pointer(object shape, str what) except NULL
+
 # -- diagnostics: flags recorded by the C code, read by the Python layer -----------
 cdef enum:
     CP_COLLISION_FLAG_GJK_WARN = 1        # GJK reached WARN_GJK_ITERATIONS

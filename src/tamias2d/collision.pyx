@@ -9,13 +9,14 @@ are bitwise equal to pymunk's.
 
 The Python part offers :func:`shapes_collide` (what ``Shape.shapes_collide``
 calls), :class:`ContactPoint` and :class:`ContactPointSet` as pymunk has them,
-and wrappers of the impulse helpers for tests and experiments.
+and wrappers of the impulse helpers for tests and experiments. The test and
+benchmark hooks that run cpCollide or single table slots on Python shapes are
+in ``_testing``.
 """
 import warnings
 
 from libc.math cimport sqrt, INFINITY
 from libc.float cimport DBL_MIN
-from libc.stdlib cimport malloc, free
 
 from tamias2d._config cimport (cpFloat, cpHashValue, cpCollisionID, cpBool,
     CP_HASH_PAIR, CP_MAX_CONTACTS_PER_ARBITER, MAX_GJK_ITERATIONS,
@@ -492,8 +493,6 @@ cdef inline void ContactPoints(const Edge e1, const Edge e2, const ClosestPoints
 
 # -- collision functions ------------------------------------------------------------------------
 
-ctypedef void (*CollisionFunc)(const cpShape *a, const cpShape *b, cpCollisionInfo *info) noexcept nogil
-
 cdef inline cpVect body_rotation(const cpShape *shape) noexcept nogil:
     # cpBodyGetRotation, or no rotation for a shape without a body.
     if shape.body != NULL:
@@ -614,8 +613,7 @@ cdef void CollisionError_(const cpShape *a, const cpShape *b, cpCollisionInfo *i
     global tamias_collision_flags
     tamias_collision_flags |= CP_COLLISION_FLAG_UNSORTED
 
-# Indexed by a.type + b.type*CP_NUM_SHAPES with a.type <= b.type.
-cdef CollisionFunc CollisionFuncs[9]
+# Indexed by a.type + b.type*CP_NUM_SHAPES with a.type <= b.type (declared in collision.pxd).
 CollisionFuncs[0] = CircleToCircle
 CollisionFuncs[1] = CollisionError_
 CollisionFuncs[2] = CollisionError_
@@ -845,6 +843,7 @@ def apply_bias_impulse(Body body not None, j, r):
     >>> import tamias2d
     >>> b = tamias2d.Body(2, 4)
     >>> apply_bias_impulse(b, (0, 4), (2, 0))
+    >>> from tamias2d._testing import _bias_velocity    # (v_bias, w_bias)
     >>> _bias_velocity(b)
     (Vec2d(0.0, 2.0), 2.0)
     """
@@ -857,6 +856,7 @@ def apply_bias_impulses(Body body_a not None, Body body_b not None, r1, r2, j):
     >>> import tamias2d
     >>> a, b = tamias2d.Body(1, 1), tamias2d.Body(1, 1)
     >>> apply_bias_impulses(a, b, (0, 0), (0, 0), (1, 0))
+    >>> from tamias2d._testing import _bias_velocity    # (v_bias, w_bias)
     >>> _bias_velocity(a)[0], _bias_velocity(b)[0]
     (Vec2d(-1.0, 0.0), Vec2d(1.0, 0.0))
     """
@@ -889,100 +889,3 @@ def k_scalar(Body body_a not None, Body body_b not None, r1, r2, n):
     if value == 0.0:
         raise UnsolvableCollision()
     return value
-
-
-# -- test and benchmark helpers (not part of the public API) -------------------------------------
-
-def _bias_velocity(Body body not None):
-    """(v_bias, w_bias) of a body, for tests of the bias impulse helpers.
-
-    >>> import tamias2d
-    >>> _bias_velocity(tamias2d.Body(1, 1))
-    (Vec2d(0.0, 0.0), 0.0)
-    """
-    return vec2d_from_cpv(body._body.v_bias), body._body.w_bias
-
-
-def _collide(shape_a, shape_b, collision_id=0):
-    """cpCollide on two shapes: returns (a_is_first, id, normal, contacts)
-    where contacts is a list of (r1, r2, hash); a_is_first is False when the
-    types were sorted by swapping the pair (then r1 is on shape_b).
-
-    >>> import tamias2d
-    >>> b = tamias2d.Body(1, 1)
-    >>> c1, c2 = tamias2d.Circle(b, 1), tamias2d.Circle(b, 1)
-    >>> _ = c1.cache_bb(), c2.cache_bb()
-    >>> _collide(c1, c2)
-    (True, 0, Vec2d(1.0, 0.0), [(Vec2d(1.0, 0.0), Vec2d(-1.0, 0.0), 0)])
-    """
-    cdef const cpShape *a = shape_pointer(shape_a, "shape_a")
-    cdef const cpShape *b = shape_pointer(shape_b, "shape_b")
-    cdef cpContact contacts[CP_MAX_CONTACTS_PER_ARBITER]
-    cdef cpCollisionInfo info
-    cdef cpCollisionID cid = collision_id
-    cdef int i
-    info = cpCollide(a, b, cid, contacts)
-    collision_check_flags()
-    return (info.a == a, info.id, vec2d_from_cpv(info.n),
-            [(vec2d_from_cpv(contacts[i].r1), vec2d_from_cpv(contacts[i].r2), contacts[i].hash)
-             for i in range(info.count)])
-
-
-def _collision_table_call(shape_a, shape_b):
-    """Call the collision table slot of (shape_a.type, shape_b.type) without
-    sorting the types, as cpCollide never does; for testing the unsorted
-    (error) slots, which raise CollisionError.
-
-    >>> import tamias2d
-    >>> b = tamias2d.Body(1, 1)
-    >>> _collision_table_call(tamias2d.Segment(b, (0, 0), (1, 0), 1), tamias2d.Circle(b, 1))
-    Traceback (most recent call last):
-    ...
-    tamias2d.errors.CollisionError: Internal Error: Shape types are not sorted.
-    """
-    cdef const cpShape *a = shape_pointer(shape_a, "shape_a")
-    cdef const cpShape *b = shape_pointer(shape_b, "shape_b")
-    cdef cpContact contacts[CP_MAX_CONTACTS_PER_ARBITER]
-    cdef cpCollisionInfo info
-    info.a = a
-    info.b = b
-    info.id = 0
-    info.n = cpv(0.0, 0.0)
-    info.count = 0
-    info.arr = contacts
-    CollisionFuncs[<unsigned int>a.klass.type + <unsigned int>b.klass.type * CP_NUM_SHAPES](a, b, &info)
-    collision_check_flags()
-    return info.count
-
-
-def _collide_loop(pairs, long rounds):
-    """Run cpCollide over a list of (shape_a, shape_b) pairs `rounds` times
-    in C without the GIL; returns the total number of contacts (benchmarks).
-
-    >>> import tamias2d
-    >>> b = tamias2d.Body(1, 1)
-    >>> _collide_loop([(tamias2d.Circle(b, 1), tamias2d.Circle(b, 1))], 10)
-    10
-    """
-    cdef list keep = [tuple(pair) for pair in pairs]
-    cdef Py_ssize_t n = len(keep), k
-    cdef long r
-    cdef long long total = 0
-    cdef cpContact contacts[CP_MAX_CONTACTS_PER_ARBITER]
-    cdef cpCollisionInfo info
-    cdef const cpShape **ptrs = <const cpShape **>malloc((2 * n + 1) * sizeof(cpShape *))
-    if ptrs == NULL:
-        raise MemoryError()
-    try:
-        for k in range(n):
-            ptrs[2 * k] = shape_pointer(keep[k][0], "shape_a")
-            ptrs[2 * k + 1] = shape_pointer(keep[k][1], "shape_b")
-        with nogil:
-            for r in range(rounds):
-                for k in range(n):
-                    info = cpCollide(ptrs[2 * k], ptrs[2 * k + 1], 0, contacts)
-                    total += info.count
-    finally:
-        free(ptrs)
-    collision_check_flags()
-    return total

@@ -25,6 +25,15 @@ cdef class Segment(Shape):
 cdef class Poly(Shape):
     cdef cpPolyShape _poly
 
+# A C copy of a Python vertex list, freed with the object; _verts_arg makes it
+# (TypeError / IllegalShape for what is not a non-empty list of pairs; with
+# finite, IllegalVector for non-finite components).
+cdef class _VertBuffer:
+    cdef cpVect *verts
+    cdef int count
+
+cdef _VertBuffer _verts_arg(object vertices, bint finite)
+
 
 # -- C level (cpShape.c, cpPolyShape.c, chipmunk.c, chipmunk_private.h) ------
 # The three class tables. A shape's kind is told by comparing shape.klass with

@@ -2,7 +2,10 @@
 
 The C half ports Munk2D's cpShape.c, cpPolyShape.c and the geometry helpers of
 chipmunk.c (moments, areas, centroid, QuickHull) with the same arithmetic, so
-every number matches pymunk 7.3. The Python half is pymunk's shape API.
+every number matches pymunk 7.3. The Python half is pymunk's shape API. The
+test hooks for C functions that API does not reach (cpConvexHull,
+cpMomentForBox2, cpShapeFilterReject, the cp*ShapeNew constructors) are in
+``_testing``.
 
 >>> import tamias2d
 >>> c = tamias2d.Circle(None, 2.0)
@@ -1012,10 +1015,7 @@ cdef int _check_massive(const cpShapeMassInfo *info, cpFloat mass) except -1:
 
 
 cdef class _VertBuffer:
-    # Owns a C copy of a Python vertex list.
-    cdef cpVect *verts
-    cdef int count
-
+    # Owns a C copy of a Python vertex list (fields in shape.pxd).
     def __dealloc__(self):
         free(self.verts)
 
@@ -1981,92 +1981,3 @@ def centroid_for_poly(vertices):
     """
     cdef _VertBuffer buf = _verts_arg(vertices, False)
     return vec2d_from_cpv(cpCentroidForPoly(buf.count, buf.verts))
-
-
-# -- test hooks: C functions that pymunk's API does not reach directly ---------------------
-def _convex_hull(vertices, tol=0.0):
-    """cpConvexHull into a separate result array; returns (hull, first).
-
-    >>> _convex_hull([(0, 0), (1, 1), (2, 0), (1, -1), (1, 0)])
-    ([Vec2d(0.0, 0.0), Vec2d(1.0, -1.0), Vec2d(2.0, 0.0), Vec2d(1.0, 1.0)], 0)
-    """
-    cdef _VertBuffer buf = _verts_arg(vertices, False)
-    cdef cpVect *result = <cpVect *>malloc(buf.count * sizeof(cpVect))
-    cdef int first = -1
-    cdef int n, i
-    if result == NULL:
-        raise MemoryError()
-    try:
-        n = cpConvexHull(buf.count, buf.verts, result, &first, tol)
-        return [vec2d_from_cpv(result[i]) for i in range(n)], first
-    finally:
-        free(result)
-
-def _moment_for_box2(mass, bb):
-    """cpMomentForBox2: moment of a box given by its BB, about the origin.
-
-    >>> _moment_for_box2(12, (0, 0, 2, 2))
-    32.0
-    """
-    return cpMomentForBox2(mass, cpbb_from_object(bb))
-
-def _filter_reject(a, b):
-    """cpShapeFilterReject on two (group, categories, mask) triples.
-
-    >>> _filter_reject((1, 1, 1), (1, 1, 1))
-    True
-    """
-    cdef cpShapeFilter fa, fb
-    fa.group, fa.categories, fa.mask = a
-    fb.group, fb.categories, fb.mask = b
-    return bool(cpShapeFilterReject(fa, fb))
-
-def _new_shape_summary(kind, *args):
-    """Build a shape with a cp*ShapeNew function (heap allocated), cache it
-    with the identity transform and return (type, mass, moment per unit mass,
-    cog, area, bb, vertices or None, radius), then free it. kind is one of
-    "circle" (radius, offset), "segment" (a, b, radius), "poly" (vertices,
-    transform, radius), "poly_raw" (vertices, radius), "box" (width, height,
-    radius), "box2" (bb, radius).
-
-    >>> _new_shape_summary("box", 2, 4, 0)[6]
-    [Vec2d(1.0, -2.0), Vec2d(1.0, 2.0), Vec2d(-1.0, 2.0), Vec2d(-1.0, -2.0)]
-    """
-    cdef cpShape *shape = NULL
-    cdef _VertBuffer buf
-    cdef cpBB bb
-    cdef int i
-    if kind == "circle":
-        shape = cpCircleShapeNew(NULL, args[0], cpv_from_object(args[1]))
-    elif kind == "segment":
-        shape = cpSegmentShapeNew(NULL, cpv_from_object(args[0]), cpv_from_object(args[1]), args[2])
-    elif kind == "poly":
-        buf = _verts_arg(args[0], False)
-        shape = cpPolyShapeNew(NULL, buf.count, buf.verts, cptransform_from_object(args[1]), args[2])
-    elif kind == "poly_raw":
-        buf = _verts_arg(args[0], False)
-        shape = cpPolyShapeNewRaw(NULL, buf.count, buf.verts, args[1])
-    elif kind == "box":
-        shape = cpBoxShapeNew(NULL, args[0], args[1], args[2])
-    elif kind == "box2":
-        shape = cpBoxShapeNew2(NULL, cpbb_from_object(args[0]), args[1])
-    else:
-        raise ValueError(f"unknown kind {kind!r}")
-    if shape == NULL:
-        raise MemoryError()
-    try:
-        bb = cpShapeUpdate(shape, cpTransformIdentity())
-        verts = None
-        if shape.klass == &cpCircleShapeClass:
-            radius = cpCircleShapeGetRadius(shape)
-        elif shape.klass == &cpSegmentShapeClass:
-            radius = cpSegmentShapeGetRadius(shape)
-        else:
-            radius = cpPolyShapeGetRadius(shape)
-            verts = [vec2d_from_cpv(cpPolyShapeGetVert(shape, i))
-                     for i in range(cpPolyShapeGetCount(shape))]
-        return (<int>shape.klass.type, shape.massInfo.m, shape.massInfo.i,
-                vec2d_from_cpv(shape.massInfo.cog), shape.massInfo.area,
-                bb_from_cpbb(bb), verts, radius)
-    finally:
-        cpShapeFree(shape)

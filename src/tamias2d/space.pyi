@@ -1,6 +1,8 @@
 # Type stub of tamias2d.space (compiled).
-from collections.abc import Hashable, KeysView
-from typing import Any, Callable, final
+from collections.abc import Hashable, Iterable, KeysView
+from typing import Any, Callable, TypeVar, final
+
+_T = TypeVar("_T")
 
 from typing_extensions import Never, Self, disjoint_base
 
@@ -14,6 +16,7 @@ from .vector import BB, Vec2d
 _CollisionCallback = Callable[[Arbiter, Space, Any], None]
 
 def empty_callback(*args: Any, **kwargs: Any) -> None: ...
+def bisection_order(objs: Iterable[_T]) -> list[_T]: ...
 @final
 class CollisionHandler:
     # Made by Space.on_collision (kept in Space._handlers): calling
@@ -85,6 +88,7 @@ class Space:
     @threads.setter
     def threads(self, n: int) -> None: ...
     def add(self, *objs: Body | Shape | Constraint) -> None: ...
+    def add_static_bulk(self, *objs: Body | Shape | Constraint) -> None: ...
     def remove(self, *objs: Body | Shape | Constraint) -> None: ...
     def reindex_shape(self, shape: Shape) -> None: ...
     def reindex_shapes_for_body(self, body: Body) -> None: ...

@@ -43,10 +43,11 @@ from tamias2d._containers cimport (cpcalloc, cprealloc, cpfree, cpArrayNew, cpAr
     cpArrayPop, cpArrayDeleteObj, cpArrayFreeEach, cpArrayContains, cpHashSetNew,
     cpHashSetFree, cpHashSetInsert, cpHashSetRemove, cpHashSetFind, cpHashSetEach,
     cpHashSetFilter, cpTakeOutOfMemory)
-from tamias2d._bbtree cimport (cpBBTreeNew, cpBBTreeSetVelocityFunc, cpBBTreeVelocityFunc,
-    cpSpatialIndexFree, cpSpatialIndexEach, cpSpatialIndexInsert, cpSpatialIndexRemove,
-    cpSpatialIndexReindex, cpSpatialIndexReindexObject, cpSpatialIndexReindexQuery,
-    cpSpatialIndexQuery, cpSpatialIndexSegmentQuery)
+from tamias2d._spatialindex cimport (cpSpatialIndexFree, cpSpatialIndexEach,
+    cpSpatialIndexInsert, cpSpatialIndexRemove, cpSpatialIndexReindex,
+    cpSpatialIndexReindexObject, cpSpatialIndexReindexQuery, cpSpatialIndexQuery,
+    cpSpatialIndexSegmentQuery)
+from tamias2d._bbtree cimport cpBBTreeNew, cpBBTreeSetVelocityFunc, cpBBTreeVelocityFunc
 from tamias2d._spacehash cimport cpSpaceHashNew
 from tamias2d.vector cimport (cpVect, cpBB, cpTransform, cpv, cpvadd, cpvsub, cpvmult,
     cpvlengthsq, cpvdist, cpfmax, cpBBIntersects, cpBBNewForCircle, cpTransformPoint,
