@@ -15,7 +15,7 @@ import time
 import pytest
 
 import tamias2d
-from tamias2d._bbtree import _TestTree
+from tamias2d._testing import _TestTree
 from tamias2d.space import bisection_order
 
 pymunk = pytest.importorskip("pymunk")
