@@ -1,6 +1,7 @@
 # Type stub of tamias2d.batch (compiled). NumPy is imported by the functions
 # on first use; the stub needs it only for the array types.
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
+from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -15,6 +16,8 @@ __all__ = [
     "get_body_ids",
     "get_arbiters",
     "arbiter_dtype",
+    "get_spaces_bodies",
+    "set_spaces_bodies",
 ]
 
 BODY_FIELDS: dict[str, int]
@@ -33,3 +36,8 @@ def arbiter_dtype() -> np.dtype[np.void]: ...
 def get_arbiters(
     space: Space, fields: str | Sequence[str] | None = None
 ) -> NDArray[np.void]: ...
+
+def get_spaces_bodies(spaces: Iterable[Space], fields: str | Sequence[str],
+                      out: NDArray[np.float64] | None = None
+                      ) -> tuple[NDArray[np.float64], NDArray[np.int64]]: ...
+def set_spaces_bodies(spaces: Iterable[Space], values: Any, fields: str | Sequence[str]) -> None: ...
