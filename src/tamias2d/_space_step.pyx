@@ -9,7 +9,7 @@ themselves. The world (cpSpace.c) and the ``Space`` class are in
 ``space.pyx``; the queries in ``_space_query.pyx``; the contact solver of one
 arbiter in ``arbiter.pyx`` and the joints' in ``constraints.pyx``.
 """
-from libc.math cimport INFINITY, pow
+from libc.math cimport INFINITY, pow, sqrt
 from libc.string cimport memcpy
 
 from tamias2d._config cimport (cpFloat, cpBool, cpHashValue, cpCollisionID, cpTimestamp,
@@ -24,7 +24,7 @@ from tamias2d._containers cimport (cpcalloc, cpfree, cpArrayPush, cpArrayPop,
     cpArrayDeleteObj, cpArrayContains, cpHashSetInsert, cpHashSetEach, cpHashSetFilter)
 from tamias2d._bbtree cimport (cpSpatialIndexEach, cpSpatialIndexInsert, cpSpatialIndexRemove,
     cpSpatialIndexReindexQuery)
-from tamias2d.vector cimport cpVect, cpBB, cpvlengthsq, cpBBIntersects
+from tamias2d.vector cimport cpVect, cpBB, cpvsub, cpvlengthsq, cpBBIntersects
 from tamias2d.body cimport (cpBodyActivate, cpBodyGetType, cpBodyIsSleeping,
     cpBodyKineticEnergy, tamias_BodySpaceHooks, tamias_set_body_space_hooks)
 from tamias2d.shape cimport cpShapeCacheBB, cpShapeFilterReject
@@ -234,13 +234,21 @@ cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID 
     cdef cpHashValue arbHashID
     cdef cpArbiter *arb
 
-    if QueryReject(a, b, space.collideMargin):
+    cdef cpFloat margin = space.collideMargin
+    cdef cpVect dv
+    if margin != 0.0:
+        # The soft solver's speculative contacts: also as far as the pair
+        # closes in this step, so that fast bodies stop at the surface
+        # instead of being caught deep inside (or not at all).
+        dv = cpvsub(b.body.v, a.body.v)
+        margin += sqrt(cpvlengthsq(dv)) * space.curr_dt
+    if QueryReject(a, b, margin):
         return id
 
     contacts = cpContactBufferGetArray(space)
     if contacts == NULL:
         return id  # out of memory: the flag is up, the pair is skipped
-    info = cpCollide(a, b, id, contacts, space.collideMargin)
+    info = cpCollide(a, b, id, contacts, margin)
     if info.count == 0:
         return info.id
     cpSpacePushContacts(space, info.count)
