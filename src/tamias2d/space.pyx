@@ -923,6 +923,14 @@ cdef class Space:
         switch from chipmunk to soft skips one position update, a switch back
         repeats one.
 
+        Joints in the soft solver are Chipmunk's own, stepped every substep
+        with ``h = dt / substeps`` (pre-step, warm start, an impulse pass in
+        the solve and one in the relax): ``max_force`` still bounds the force
+        (an impulse of ``max_force * h`` per substep), ``error_bias`` is
+        still the fraction of a joint's error left after one second,
+        ``max_bias`` caps the correction speed; ``Constraint.impulse`` after
+        a step is the last substep's impulse times ``substeps``.
+
         >>> import tamias2d
         >>> tamias2d.Space().solver
         'chipmunk'
