@@ -488,23 +488,29 @@ class Result:
 
 
 def run_case(mod, case, steps=None, iterations=None, substeps=1, slop=None, full=False,
-             stop_early=False):
+             stop_early=False, solver=None):
     """Build `case` in engine `mod`, run it and judge it.
 
     `steps` defaults to case.steps (or case.full_steps with full=True).
     Never raises for an engine exception: it becomes ``Result.error`` and a
     failed result. With stop_early, a run whose sample already fails stops
     there (``Result.stopped_at`` is the step; the hash is of that state).
+    `solver` (tamias2d only) sets ``Space.solver`` of the scene and of its
+    reference scene.
     """
     if steps is None:
         steps = case.full_steps if full else case.steps
     settings = {"iterations": iterations or 10, "substeps": substeps}
     if slop is not None:
         settings["slop"] = slop
+    if solver is not None:
+        settings["solver"] = solver
     dt = case.dt / substeps
     reference = None
     if case.reference is not None:
         ref = case.reference(mod)
+        if solver is not None:
+            ref.space.solver = solver
         if iterations is not None:
             ref.space.iterations = iterations
         if slop is not None:
@@ -515,6 +521,8 @@ def run_case(mod, case, steps=None, iterations=None, substeps=1, slop=None, full
     scene = case.build(mod)
     scene.watch["reference"] = reference
     space = scene.space
+    if solver is not None:
+        space.solver = solver
     if iterations is not None:
         space.iterations = iterations
     if slop is not None:

@@ -37,6 +37,9 @@ def mixed_scenes():
     out.append(r)
     out.append(scenes.drum(tamias2d, count=30))
     out.append(scenes.vertical_stack(tamias2d, count=6))
+    soft = scenes.pyramid(tamias2d, rows=6)
+    soft.solver = "soft"
+    out.append(soft)
     out.append(tamias2d.Space())          # empty
     return out
 

@@ -52,6 +52,7 @@ physics does not depend on it.
 True
 """
 from libc.stdlib cimport malloc, free, qsort
+from libc.math cimport INFINITY
 from libc.string cimport memcpy, memset, memcmp
 from libc.stdint cimport uintptr_t, int32_t, uint32_t, uint64_t
 from cpython.bytes cimport PyBytes_FromStringAndSize, PyBytes_AS_STRING, PyBytes_GET_SIZE
@@ -98,7 +99,7 @@ cdef struct ContactBuffer:
     cpContactBufferHeader header
     cpContact contacts[CONTACTS_PER_BUFFER]
 
-DEF FORMAT_VERSION = 1
+DEF FORMAT_VERSION = 2
 
 # Records. Only 8- and 4-byte fields, widest first, so there is no padding.
 cdef struct SpaceRec:
@@ -131,6 +132,18 @@ cdef struct SpaceRec:
     int32_t ncontacts          # contacts stored after the arbiter records
     int32_t nconstraints       # Space.constraints
     int32_t nstep_constraints  # the space's constraint array (sleeping ones are out)
+
+# The soft solver's settings (Space.solver and its attributes; see
+# _soft_step.pxd), written right after the SpaceRec. The soft solver keeps no
+# other state across steps: its warm start is the contacts' jnAcc / jtAcc,
+# which the arbiter records carry already.
+cdef struct SoftRec:
+    cpFloat contactHertz
+    cpFloat contactDampingRatio
+    cpFloat pushOut
+    cpFloat speculative
+    int32_t solver
+    int32_t substeps
 
 cdef struct BodyRec:
     int32_t in_space
@@ -256,7 +269,7 @@ cdef void _fill_header(Header *h) noexcept nogil:
     memcpy(h.magic, b"T2DSNAP\0", 8)
     h.version = FORMAT_VERSION
     h.ptr_size = sizeof(void *)
-    h.sizes[0] = sizeof(SpaceRec)
+    h.sizes[0] = sizeof(SpaceRec) ^ (sizeof(SoftRec) << 16)
     h.sizes[1] = sizeof(BodyRec)
     h.sizes[2] = sizeof(ShapeRec)
     h.sizes[3] = sizeof(HandlerRec)
@@ -887,6 +900,37 @@ cdef int _find_buffer(const BufRange *r, int n, uintptr_t addr) noexcept nogil:
     return -1
 
 
+# -- the soft solver's settings (one record; kept apart from the rest) -----------------------
+
+cdef void _put_soft(Writer *w, const cpSpace *space) noexcept nogil:
+    cdef SoftRec rec
+    memset(&rec, 0, sizeof(SoftRec))
+    rec.contactHertz = space.soft.contactHertz
+    rec.contactDampingRatio = space.soft.contactDampingRatio
+    rec.pushOut = space.soft.pushOut
+    rec.speculative = space.soft.speculative
+    rec.solver = space.soft.solver
+    rec.substeps = space.soft.substeps
+    w_put(w, &rec, sizeof(SoftRec))
+
+cdef int _check_soft(const SoftRec *rec) except -1:
+    if not (rec.solver in (0, 1) and rec.substeps >= 1
+            and rec.contactHertz >= 0.0 and rec.contactDampingRatio >= 0.0
+            and rec.contactHertz < INFINITY and rec.contactDampingRatio < INFINITY
+            and rec.pushOut < INFINITY and rec.speculative < INFINITY
+            and rec.pushOut == rec.pushOut and rec.speculative == rec.speculative):
+        raise CopyError("the snapshot of the space is corrupt (solver settings)")
+    return 0
+
+cdef void _apply_soft(cpSpace *space, const SoftRec *rec) noexcept nogil:
+    space.soft.contactHertz = rec.contactHertz
+    space.soft.contactDampingRatio = rec.contactDampingRatio
+    space.soft.pushOut = rec.pushOut
+    space.soft.speculative = rec.speculative
+    space.soft.solver = rec.solver
+    space.soft.substeps = rec.substeps
+
+
 cdef bytes _capture(Space sp, list table, list shapes, list constraints):
     cdef cpSpace *space = &sp._space
     cdef Writer w
@@ -1099,6 +1143,7 @@ cdef bytes _capture(Space sp, list table, list shapes, list constraints):
         srec.nconstraints = <int32_t>nc
         srec.nstep_constraints = space.constraints.num
         w_put(&w, &srec, sizeof(SpaceRec))
+        _put_soft(&w, space)
 
         # -- bodies, then the Body.shapes orders ---------------------------------------------
         for i in range(nb):
@@ -1409,6 +1454,7 @@ cdef inline int32_t _handler_num(PtrMap *handlers, cpCollisionHandler *h,
 # Everything parsed from a snapshot, before anything is changed.
 cdef struct Parsed:
     SpaceRec s
+    SoftRec soft
     const BodyRec *bodies
     const int32_t *views
     const ShapeRec *shapes
@@ -1456,6 +1502,8 @@ cdef int _parse(bytes blob, Parsed *p) except -1:
         raise CopyError("the snapshot was made by another version or build of tamias2d "
                         "(record layout differs)")
     r_get(&r, &p.s, sizeof(SpaceRec))
+    r_get(&r, &p.soft, sizeof(SoftRec))
+    _check_soft(&p.soft)
     nb = p.s.nbodies
     ns = p.s.nshapes
     na = p.s.narbiters
@@ -1958,6 +2006,7 @@ cdef int _restore(Space sp, list table, list shapes, list constraints, bytes blo
         space.stamp = p.s.stamp
         space.curr_dt = p.s.curr_dt
         space.shapeIDCounter = <cpHashValue>p.s.shapeIDCounter
+        _apply_soft(space, &p.soft)
 
         # -- contact buffers (a ring, the last one is the head) ---------------------------
         for j in range(m.nbufs):

@@ -9,7 +9,7 @@ themselves. The world (cpSpace.c) and the ``Space`` class are in
 ``space.pyx``; the queries in ``_space_query.pyx``; the contact solver of one
 arbiter in ``arbiter.pyx`` and the joints' in ``constraints.pyx``.
 """
-from libc.math cimport INFINITY, pow
+from libc.math cimport INFINITY, pow, sqrt
 from libc.string cimport memcpy
 
 from tamias2d._config cimport (cpFloat, cpBool, cpHashValue, cpCollisionID, cpTimestamp,
@@ -24,7 +24,7 @@ from tamias2d._containers cimport (cpcalloc, cpfree, cpArrayPush, cpArrayPop,
     cpArrayDeleteObj, cpArrayContains, cpHashSetInsert, cpHashSetEach, cpHashSetFilter)
 from tamias2d._spatialindex cimport (cpSpatialIndexEach, cpSpatialIndexInsert, cpSpatialIndexRemove,
     cpSpatialIndexReindexQuery)
-from tamias2d.vector cimport cpVect, cpvlengthsq, cpBBIntersects
+from tamias2d.vector cimport cpVect, cpBB, cpvsub, cpvlengthsq, cpBBIntersects
 from tamias2d.body cimport (cpBodyActivate, cpBodyGetType, cpBodyIsSleeping,
     cpBodyKineticEnergy, tamias_BodySpaceHooks, tamias_set_body_space_hooks)
 from tamias2d.shape cimport cpShapeCacheBB, cpShapeFilterReject
@@ -209,8 +209,15 @@ cdef inline cpBool QueryRejectConstraint(cpBody *a, cpBody *b) noexcept nogil:
         constraint = cpConstraintNext(constraint, a)
     return 0
 
-cdef inline cpBool QueryReject(cpShape *a, cpShape *b) noexcept nogil:
-    return (not cpBBIntersects(a.bb, b.bb)
+# The boxes are compared `margin` apart (the soft solver's speculative
+# distance; 0 in the chipmunk solver, where b + 0.0 is b and the test is
+# Munk2D's).
+cdef inline cpBool BBsWithin(cpBB a, cpBB b, cpFloat margin) noexcept nogil:
+    return (a.l <= b.r + margin and b.l <= a.r + margin
+            and a.b <= b.t + margin and b.b <= a.t + margin)
+
+cdef inline cpBool QueryReject(cpShape *a, cpShape *b, cpFloat margin) noexcept nogil:
+    return (not BBsWithin(a.bb, b.bb, margin)
             or a.body == b.body
             or cpShapeFilterReject(a.filter, b.filter)
             or QueryRejectConstraint(a.body, b.body))
@@ -227,13 +234,21 @@ cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID 
     cdef cpHashValue arbHashID
     cdef cpArbiter *arb
 
-    if QueryReject(a, b):
+    cdef cpFloat margin = space.collideMargin
+    cdef cpVect dv
+    if margin != 0.0:
+        # The soft solver's speculative contacts: also as far as the pair
+        # closes in this step, so that fast bodies stop at the surface
+        # instead of being caught deep inside (or not at all).
+        dv = cpvsub(b.body.v, a.body.v)
+        margin += sqrt(cpvlengthsq(dv)) * space.curr_dt
+    if QueryReject(a, b, margin):
         return id
 
     contacts = cpContactBufferGetArray(space)
     if contacts == NULL:
         return id  # out of memory: the flag is up, the pair is skipped
-    info = cpCollide(a, b, id, contacts)
+    info = cpCollide(a, b, id, contacts, margin)
     if info.count == 0:
         return info.id
     cpSpacePushContacts(space, info.count)
@@ -321,6 +336,8 @@ cdef void cpSpaceStep(cpSpace *space, cpFloat dt) noexcept nogil:
     cdef cpFloat prev_dt = space.curr_dt
     space.curr_dt = dt
     cdef int collided
+    # Touching contacts only, as Munk2D (the soft solver widens it).
+    space.collideMargin = 0.0
 
     StageResetArbiters(space)
     cpSpaceLock(space)

@@ -78,6 +78,11 @@ cdef struct cpBody:
     cpArbiter *arbiterList
     cpConstraint *constraintList
     cpBodySleeping sleeping
+    # Not in Munk2D (the soft solver, _soft_step.pxd): the body's slot in the
+    # solver's body array during a soft step (scratch, valid only then), and
+    # Body.is_bullet (continuous collision against dynamic bodies too).
+    int solverIndex
+    cpBool isBullet
 
 # -- shapes (cpShape.c, cpPolyShape.c) ---------------------------------------------
 cdef struct cpShapeFilter:
@@ -190,6 +195,10 @@ cdef struct cpCollisionInfo:
     cpVect n
     int count
     cpContact *arr
+    # Not in Munk2D: points are kept up to this separation (0 for the
+    # chipmunk solver, which keeps only touching points; the soft solver's
+    # speculative distance).
+    cpFloat margin
 
 cdef struct cpContactPoint:
     cpVect pointA
@@ -324,6 +333,31 @@ cdef struct cpPostStepCallback:
     void *key
     void *data
 
+# The soft solver's settings (Space.solver = "soft"; _soft_step.pxd). Lengths
+# and speeds here are in scene units; a negative pushOut or speculative means
+# "derived from collisionSlop" (see _soft_step.pxd for the factors).
+cdef enum:
+    TAMIAS_SOLVER_CHIPMUNK = 0
+    TAMIAS_SOLVER_SOFT = 1
+
+cdef struct cpSoftSettings:
+    cpFloat contactHertz         # contact stiffness (Hz)
+    cpFloat contactDampingRatio  # contact damping ratio (1 = critical)
+    cpFloat pushOut              # max push-out speed, units/s (< 0: auto)
+    cpFloat speculative          # speculative distance, units (< 0: auto)
+    int solver                   # TAMIAS_SOLVER_*
+    int substeps                 # >= 1
+
+# Per-step scratch of the soft solver, owned by the space (grown, never
+# shrunk; freed by cpSpaceDestroy; never copied).
+cdef struct cpSoftScratch:
+    void *bodies
+    int bodyCap
+    void *contacts
+    int contactCap
+    void *jointBodies
+    int jointBodyCap
+
 cdef struct cpContactBufferHeader:
     cpTimestamp stamp
     cpContactBufferHeader *next
@@ -367,3 +401,9 @@ cdef struct cpSpace:
     unsigned long stepThread
     void *stepLock
     int stepWaiters
+    # Not in Munk2D: the second solver (see cpSoftSettings), and the margin
+    # the narrow phase of this step keeps points within (0 in the chipmunk
+    # solver, so its contacts are Munk2D's).
+    cpSoftSettings soft
+    cpSoftScratch softScratch
+    cpFloat collideMargin

@@ -863,7 +863,7 @@ def _collide(shape_a, shape_b, collision_id=0):
     cdef cpCollisionInfo info
     cdef cpCollisionID cid = collision_id
     cdef int i
-    info = cpCollide(a, b, cid, contacts)
+    info = cpCollide(a, b, cid, contacts, 0.0)
     collision_check_flags()
     return (info.a == a, info.id, vec2d_from_cpv(info.n),
             [(vec2d_from_cpv(contacts[i].r1), vec2d_from_cpv(contacts[i].r2), contacts[i].hash)
@@ -922,7 +922,7 @@ def _collide_loop(pairs, long rounds):
         with nogil:
             for r in range(rounds):
                 for k in range(n):
-                    info = cpCollide(ptrs[2 * k], ptrs[2 * k + 1], 0, contacts)
+                    info = cpCollide(ptrs[2 * k], ptrs[2 * k + 1], 0, contacts, 0.0)
                     total += info.count
     finally:
         free(ptrs)

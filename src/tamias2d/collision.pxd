@@ -26,9 +26,11 @@ from tamias2d._private cimport (relative_velocity, normal_relative_velocity,
 # `id` is the GJK warm-start id cached by the broad phase (0: none); the
 # updated id is returned in the info. Contacts (at most 2) are written to
 # `contacts` with absolute positions r1 (on info.a) and r2 (on info.b);
-# info.a/info.b may be the arguments swapped (shape types sorted).
+# info.a/info.b may be the arguments swapped (shape types sorted). Points are
+# kept up to a separation of `margin` (0: touching only, as Munk2D; the soft
+# solver's speculative distance otherwise).
 cdef cpCollisionInfo cpCollide(const cpShape *a, const cpShape *b, cpCollisionID id,
-                               cpContact *contacts) noexcept nogil
+                               cpContact *contacts, cpFloat margin) noexcept nogil
 
 # Contact points of two shapes oriented a -> b, as the query API reports them.
 cdef cpContactPointSet cpShapesCollide(const cpShape *a, const cpShape *b) noexcept nogil

@@ -465,9 +465,10 @@ cdef ClosestPoints GJK(const SupportContext *ctx, cpCollisionID *id) noexcept no
 cdef inline void ContactPoints(const Edge e1, const Edge e2, const ClosestPoints points,
                                cpCollisionInfo *info) noexcept nogil:
     cdef cpFloat mindist = e1.r + e2.r
+    cdef cpFloat margin = info.margin
     cdef cpVect n, p1, p2
     cdef cpFloat d_e1_a, d_e1_b, d_e2_a, d_e2_b, e1_denom, e2_denom, dist
-    if points.d <= mindist:
+    if points.d <= mindist + margin:
         n = points.n
         info.n = n
         # Positions across the normal.
@@ -482,13 +483,13 @@ cdef inline void ContactPoints(const Edge e1, const Edge e2, const ClosestPoints
         p1 = cpvadd(cpvmult(n, e1.r), cpvlerp(e1.a.p, e1.b.p, cpfclamp01((d_e2_b - d_e1_a) * e1_denom)))
         p2 = cpvadd(cpvmult(n, -e2.r), cpvlerp(e2.a.p, e2.b.p, cpfclamp01((d_e1_a - d_e2_a) * e2_denom)))
         dist = cpvdot(cpvsub(p2, p1), n)
-        if dist <= 0.0:
+        if dist <= margin:
             cpCollisionInfoPushContact(info, p1, p2, CP_HASH_PAIR(e1.a.hash, e2.b.hash))
 
         p1 = cpvadd(cpvmult(n, e1.r), cpvlerp(e1.a.p, e1.b.p, cpfclamp01((d_e2_a - d_e1_a) * e1_denom)))
         p2 = cpvadd(cpvmult(n, -e2.r), cpvlerp(e2.a.p, e2.b.p, cpfclamp01((d_e1_b - d_e2_a) * e2_denom)))
         dist = cpvdot(cpvsub(p2, p1), n)
-        if dist <= 0.0:
+        if dist <= margin:
             cpCollisionInfoPushContact(info, p1, p2, CP_HASH_PAIR(e1.b.hash, e2.a.hash))
 
 # -- collision functions ------------------------------------------------------------------------
@@ -502,7 +503,8 @@ cdef inline cpVect body_rotation(const cpShape *shape) noexcept nogil:
 cdef void CircleToCircle(const cpShape *a, const cpShape *b, cpCollisionInfo *info) noexcept nogil:
     cdef const cpCircleShape *c1 = <const cpCircleShape *>a
     cdef const cpCircleShape *c2 = <const cpCircleShape *>b
-    cdef cpFloat mindist = c1.r + c2.r
+    # + margin: exact for the chipmunk solver's 0, so its bits are Munk2D's.
+    cdef cpFloat mindist = c1.r + c2.r + info.margin
     cdef cpVect delta = cpvsub(c2.tc, c1.tc)
     cdef cpFloat distsq = cpvlengthsq(delta)
     cdef cpFloat dist
@@ -525,7 +527,7 @@ cdef void CircleToSegment(const cpShape *a, const cpShape *b, cpCollisionInfo *i
     cdef cpVect seg_delta = cpvsub(seg_b, seg_a)
     cdef cpFloat closest_t = cpfclamp01(cpvdot(seg_delta, cpvsub(center, seg_a)) / cpvlengthsq(seg_delta))
     cdef cpVect closest = cpvadd(seg_a, cpvmult(seg_delta, closest_t))
-    cdef cpFloat mindist = circle.r + segment.r
+    cdef cpFloat mindist = circle.r + segment.r + info.margin
     cdef cpVect delta = cpvsub(closest, center)
     cdef cpFloat distsq = cpvlengthsq(delta)
     cdef cpFloat dist
@@ -555,7 +557,7 @@ cdef void SegmentToSegment(const cpShape *a, const cpShape *b, cpCollisionInfo *
     cdef cpVect n = points.n
     cdef cpVect rot1 = body_rotation(a)
     cdef cpVect rot2 = body_rotation(b)
-    if (points.d <= (seg1.r + seg2.r) and (
+    if (points.d <= (seg1.r + seg2.r) + info.margin and (
             (not cpveql(points.a, seg1.ta) or cpvdot(n, cpvrotate(seg1.a_tangent, rot1)) <= 0.0) and
             (not cpveql(points.a, seg1.tb) or cpvdot(n, cpvrotate(seg1.b_tangent, rot1)) <= 0.0) and
             (not cpveql(points.b, seg2.ta) or cpvdot(n, cpvrotate(seg2.a_tangent, rot2)) >= 0.0) and
@@ -571,7 +573,7 @@ cdef void PolyToPoly(const cpShape *a, const cpShape *b, cpCollisionInfo *info) 
     context.func1 = PolySupportPoint
     context.func2 = PolySupportPoint
     cdef ClosestPoints points = GJK(&context, &info.id)
-    if points.d - poly1.r - poly2.r <= 0.0:
+    if points.d - poly1.r - poly2.r <= info.margin:
         ContactPoints(SupportEdgeForPoly(poly1, points.n), SupportEdgeForPoly(poly2, cpvneg(points.n)),
                       points, info)
 
@@ -586,7 +588,7 @@ cdef void SegmentToPoly(const cpShape *a, const cpShape *b, cpCollisionInfo *inf
     cdef ClosestPoints points = GJK(&context, &info.id)
     cdef cpVect n = points.n
     cdef cpVect rot = body_rotation(a)
-    if (points.d - seg.r - poly.r <= 0.0 and (
+    if (points.d - seg.r - poly.r <= info.margin and (
             (not cpveql(points.a, seg.ta) or cpvdot(n, cpvrotate(seg.a_tangent, rot)) <= 0.0) and
             (not cpveql(points.a, seg.tb) or cpvdot(n, cpvrotate(seg.b_tangent, rot)) <= 0.0))):
         ContactPoints(SupportEdgeForSegment(seg, n), SupportEdgeForPoly(poly, cpvneg(n)), points, info)
@@ -601,7 +603,7 @@ cdef void CircleToPoly(const cpShape *a, const cpShape *b, cpCollisionInfo *info
     context.func2 = PolySupportPoint
     cdef ClosestPoints points = GJK(&context, &info.id)
     cdef cpVect n
-    if points.d <= circle.r + poly.r:
+    if points.d <= circle.r + poly.r + info.margin:
         n = points.n
         info.n = n
         cpCollisionInfoPushContact(info, cpvadd(points.a, cpvmult(n, circle.r)),
@@ -625,9 +627,10 @@ CollisionFuncs[7] = SegmentToPoly
 CollisionFuncs[8] = PolyToPoly
 
 cdef cpCollisionInfo cpCollide(const cpShape *a, const cpShape *b, cpCollisionID id,
-                               cpContact *contacts) noexcept nogil:
+                               cpContact *contacts, cpFloat margin) noexcept nogil:
     cdef cpCollisionInfo info
     cdef unsigned int index
+    info.margin = margin
     info.a = a
     info.b = b
     info.id = id
@@ -647,7 +650,7 @@ cdef cpCollisionInfo cpCollide(const cpShape *a, const cpShape *b, cpCollisionID
 
 cdef cpContactPointSet cpShapesCollide(const cpShape *a, const cpShape *b) noexcept nogil:
     cdef cpContact contacts[CP_MAX_CONTACTS_PER_ARBITER]
-    cdef cpCollisionInfo info = cpCollide(a, b, 0, contacts)
+    cdef cpCollisionInfo info = cpCollide(a, b, 0, contacts, 0.0)
     cdef cpContactPointSet set
     cdef cpBool swapped
     cdef cpVect p1, p2

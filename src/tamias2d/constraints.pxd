@@ -213,6 +213,8 @@ cdef void tamias_constraint_detach(cpConstraint *constraint) noexcept nogil
 # those of the bodies of its sleeping components. For Space teardown.
 cdef void tamias_space_detach_constraints(cpSpace *space) noexcept nogil
 cdef void tamias_constraint_clear_impulse(cpConstraint *c) noexcept nogil
+# Multiplies the accumulated (warm-start) impulse by factor (the soft solver).
+cdef void tamias_constraint_scale_impulse(cpConstraint *c, cpFloat factor) noexcept nogil
 # Raise a clear exception (and return -1) if a constraint of the space's array
 # would drive the solver into a division by zero or a NaN: a dynamic body with
 # a mass or moment the step would reject, a ratchet or gear ratio of 0, or a

@@ -740,6 +740,32 @@ cdef void tamias_constraint_clear_impulse(cpConstraint *c) noexcept nogil:
     elif k == &_simpleMotorClass:
         (<cpSimpleMotor *>c).jAcc = 0.0
 
+cdef void tamias_constraint_scale_impulse(cpConstraint *c, cpFloat factor) noexcept nogil:
+    # The soft solver keeps a joint's accumulated impulse per substep inside
+    # its step and per step between steps (as the chipmunk solver does): it
+    # rescales it at the start and the end of its step.
+    cdef cpConstraintClass *k = c.klass
+    if k == &_pinJointClass:
+        (<cpPinJoint *>c).jnAcc *= factor
+    elif k == &_slideJointClass:
+        (<cpSlideJoint *>c).jnAcc *= factor
+    elif k == &_pivotJointClass:
+        (<cpPivotJoint *>c).jAcc = cpvmult((<cpPivotJoint *>c).jAcc, factor)
+    elif k == &_grooveJointClass:
+        (<cpGrooveJoint *>c).jAcc = cpvmult((<cpGrooveJoint *>c).jAcc, factor)
+    elif k == &_dampedSpringClass:
+        (<cpDampedSpring *>c).jAcc *= factor
+    elif k == &_dampedRotarySpringClass:
+        (<cpDampedRotarySpring *>c).jAcc *= factor
+    elif k == &_rotaryLimitJointClass:
+        (<cpRotaryLimitJoint *>c).jAcc *= factor
+    elif k == &_ratchetJointClass:
+        (<cpRatchetJoint *>c).jAcc *= factor
+    elif k == &_gearJointClass:
+        (<cpGearJoint *>c).jAcc *= factor
+    elif k == &_simpleMotorClass:
+        (<cpSimpleMotor *>c).jAcc *= factor
+
 cdef void tamias_space_detach_constraints(cpSpace *space) noexcept nogil:
     cdef cpArray *arr = space.constraints
     cdef cpArray *components = space.sleepingComponents

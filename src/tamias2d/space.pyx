@@ -81,6 +81,9 @@ from tamias2d._private cimport (cpConstraintNext, cpSpaceArrayForBodyType,
 from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, cpSpaceGetPostStepCallback,
     cpSpaceAddPostStepCallback, cpSpaceStep, cpShapeUpdateFunc, cpSpaceWakeComponent, _bodyNonFinite,
     _firstNonFiniteBody, _forgetNonFiniteImpulses, OrphanScan, _scanOrphans)
+from tamias2d._soft_step cimport (cpSoftStep, SoftSettingsInit, SoftScratchFree, SoftPushOut,
+    SoftSpeculative)
+from tamias2d._structs cimport TAMIAS_SOLVER_CHIPMUNK, TAMIAS_SOLVER_SOFT
 from tamias2d._space_query cimport (QueryHit, QueryHits, ShapeQueryHits, cpSpacePointQuery,
     cpSpacePointQueryNearest, cpSpaceSegmentQuery, cpSpaceSegmentQueryFirst, cpSpaceBBQuery,
     cpSpaceShapeQuery)
@@ -136,6 +139,15 @@ cdef cpSpace *cpSpaceInit(cpSpace *space) noexcept nogil:
     space.stamp = 0
     space.curr_dt = 0.0
     space.userData = NULL
+    # Not in Munk2D: the second solver's settings (off: solver "chipmunk").
+    SoftSettingsInit(&space.soft)
+    space.softScratch.bodies = NULL
+    space.softScratch.contacts = NULL
+    space.softScratch.jointBodies = NULL
+    space.softScratch.bodyCap = 0
+    space.softScratch.contactCap = 0
+    space.softScratch.jointBodyCap = 0
+    space.collideMargin = 0.0
 
     space.shapeIDCounter = 0
     space.staticShapes = cpBBTreeNew(_shapeGetBB, NULL)
@@ -191,6 +203,7 @@ cdef void cpSpaceSetStaticBody(cpSpace *space, cpBody *body) noexcept nogil:
 cdef void cpSpaceDestroy(cpSpace *space) noexcept nogil:
     # Munk2D wakes every body first so that sleeping arbiters give their heap
     # contacts back; here the Python layer has already removed every object.
+    SoftScratchFree(&space.softScratch)
     if space.staticShapes != NULL:
         cpSpatialIndexFree(space.staticShapes)
     if space.dynamicShapes != NULL:
@@ -481,7 +494,10 @@ cdef void _collectShape(void *obj, void *data) noexcept with gil:
 # The C part of Space.step: the solver's step, then the first body it made
 # non-finite (NULL if none). Runs without the GIL.
 cdef cpBody *tamias_space_step(cpSpace *space, cpFloat dt) noexcept nogil:
-    cpSpaceStep(space, dt)
+    if space.soft.solver == TAMIAS_SOLVER_SOFT:
+        cpSoftStep(space, dt)
+    else:
+        cpSpaceStep(space, dt)
     return _firstNonFiniteBody(space.dynamicBodies)
 
 
@@ -725,6 +741,21 @@ cdef _remove_constraint(Space space, Constraint constraint):
     del space._constraints[constraint]
 
 
+cdef double _soft_nonneg(object value, str what) except? -1.0:
+    # A soft-solver setting: a finite number >= 0 (NaN, inf and negative
+    # values would make the contacts' bias NaN or push the wrong way).
+    cdef double x
+    if isinstance(value, bool):
+        raise ValueError(f"{what} must be a finite number >= 0, not {value!r}")
+    try:
+        x = value
+    except TypeError:
+        raise ValueError(f"{what} must be a finite number >= 0, not {value!r}") from None
+    if not (isfinite(x) and x >= 0.0):
+        raise ValueError(f"{what} must be a finite number >= 0, not {value!r}")
+    return x
+
+
 @cython.no_gc_clear
 cdef class Space:
     """A world of bodies and shapes that steps forward through time.
@@ -767,8 +798,9 @@ cdef class Space:
         self._callback_error = None
         self.threaded = False
 
-    def __init__(self, threaded=False):
+    def __init__(self, threaded=False, *, solver="chipmunk"):
         self.threaded = bool(threaded) and platform.system() != "Windows"
+        self.solver = solver
 
     def __dealloc__(self):
         cdef cpCollisionHandler *h
@@ -907,6 +939,168 @@ cdef class Space:
             raise ValueError("iterations must be a positive integer")
         tamias_wait_for_step(&self._space)
         self._space.iterations = <int>v
+
+    # -- the solver (not in pymunk: tamias2d has two) ---------------------------------------
+
+    @property
+    def solver(self):
+        """The contact and joint solver: ``"chipmunk"`` (the default:
+        Munk2D's, bitwise pymunk's) or ``"soft"`` (Box2D v3's soft step with
+        substeps, soft contacts, relax and restitution passes and speculative
+        contacts; see README "Two solvers"). Settable between steps, and as
+        ``Space(solver=...)``; changing it from a callback during a step
+        raises :class:`~tamias2d.errors.SpaceLocked`. An unknown name is a
+        ValueError listing the names.
+
+        The chipmunk solver updates positions at the start of its step (with
+        the last step's velocities), the soft solver inside its substeps: a
+        switch from chipmunk to soft skips one position update, a switch back
+        repeats one.
+
+        Joints in the soft solver are Chipmunk's own, stepped every substep
+        with ``h = dt / substeps`` (pre-step, warm start, an impulse pass in
+        the solve and one in the relax): ``max_force`` still bounds the force
+        (an impulse of ``max_force * h`` per substep), ``error_bias`` is
+        still the fraction of a joint's error left after one second,
+        ``max_bias`` caps the correction speed; ``Constraint.impulse`` after
+        a step is the last substep's impulse times ``substeps``.
+
+        >>> import tamias2d
+        >>> tamias2d.Space().solver
+        'chipmunk'
+        >>> s = tamias2d.Space(solver="soft")
+        >>> s.solver
+        'soft'
+        >>> s.solver = "box2d"
+        Traceback (most recent call last):
+          ...
+        ValueError: unknown solver 'box2d': the solvers are 'chipmunk', 'soft'
+        """
+        return "soft" if self._space.soft.solver == TAMIAS_SOLVER_SOFT else "chipmunk"
+
+    @solver.setter
+    def solver(self, value):
+        cdef int which
+        if value == "chipmunk":
+            which = TAMIAS_SOLVER_CHIPMUNK
+        elif value == "soft":
+            which = TAMIAS_SOLVER_SOFT
+        else:
+            raise ValueError(f"unknown solver {value!r}: the solvers are 'chipmunk', 'soft'")
+        if self._locked or cpSpaceIsLocked(&self._space):
+            raise SpaceLocked("the solver cannot be changed during a step (from a callback); "
+                              "change it between steps")
+        tamias_wait_for_step(&self._space)
+        self._space.soft.solver = which
+
+    @property
+    def substeps(self):
+        """Substeps per step of the soft solver (default 4; the chipmunk
+        solver ignores it): each step collides once, then integrates and
+        solves ``substeps`` times with ``dt / substeps``. An integer >= 1.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space(solver="soft")
+        >>> s.substeps
+        4
+        >>> s.substeps = 8
+        >>> s.substeps = 0
+        Traceback (most recent call last):
+          ...
+        ValueError: substeps must be an integer >= 1, not 0
+        """
+        return self._space.soft.substeps
+
+    @substeps.setter
+    def substeps(self, value):
+        if isinstance(value, bool) or not isinstance(value, int) or not (1 <= value <= 1000000):
+            raise ValueError(f"substeps must be an integer >= 1, not {value!r}")
+        tamias_wait_for_step(&self._space)
+        self._space.soft.substeps = <int>value
+
+    @property
+    def contact_hertz(self):
+        """Stiffness of the soft solver's contacts, in hertz (default 30;
+        capped at a quarter of the substep rate, and twice as stiff against
+        static and kinematic bodies). Time only: the same in any length
+        units. 0 turns the push-out off (rigid velocity contacts).
+
+        >>> import tamias2d
+        >>> tamias2d.Space().contact_hertz
+        30.0
+        """
+        return self._space.soft.contactHertz
+
+    @contact_hertz.setter
+    def contact_hertz(self, value):
+        tamias_wait_for_step(&self._space)
+        self._space.soft.contactHertz = _soft_nonneg(value, "contact_hertz")
+
+    @property
+    def contact_damping_ratio(self):
+        """Damping ratio of the soft solver's contacts (default 10: heavily
+        over-damped, so overlaps are pushed out without bounce; 1 is
+        critical damping). Dimensionless.
+
+        >>> import tamias2d
+        >>> tamias2d.Space().contact_damping_ratio
+        10.0
+        """
+        return self._space.soft.contactDampingRatio
+
+    @contact_damping_ratio.setter
+    def contact_damping_ratio(self, value):
+        tamias_wait_for_step(&self._space)
+        self._space.soft.contactDampingRatio = _soft_nonneg(value, "contact_damping_ratio")
+
+    @property
+    def contact_push_out(self):
+        """The soft solver's maximum speed (scene units per second) at which
+        overlapping shapes are pushed apart. By default it follows the scene's
+        scale: 600 x ``collision_slop`` per second (60 for the default slop
+        0.1, i.e. Box2D's 3 m/s for its 0.005 m slop). Set a number >= 0 to
+        fix it, ``None`` to go back to the default.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> round(s.contact_push_out, 6)
+        60.000001
+        >>> s.collision_slop = 0.001
+        >>> round(s.contact_push_out, 6)
+        0.6
+        >>> s.contact_push_out = 5
+        >>> s.contact_push_out
+        5.0
+        """
+        return SoftPushOut(&self._space)
+
+    @contact_push_out.setter
+    def contact_push_out(self, value):
+        tamias_wait_for_step(&self._space)
+        self._space.soft.pushOut = -1.0 if value is None else _soft_nonneg(value, "contact_push_out")
+
+    @property
+    def speculative_distance(self):
+        """How far apart (scene units) the soft solver's narrow phase still
+        reports contact points, so that approaching shapes stop before they
+        overlap. Default 4 x ``collision_slop`` (follows it); ``None`` goes
+        back to the default. The chipmunk solver always uses 0 (touching
+        points only, as pymunk). Points of such contacts may have a positive
+        ``distance``; begin and separate callbacks fire when shapes come
+        within or leave this distance.
+
+        >>> import tamias2d
+        >>> s = tamias2d.Space()
+        >>> round(s.speculative_distance, 6)
+        0.4
+        """
+        return SoftSpeculative(&self._space)
+
+    @speculative_distance.setter
+    def speculative_distance(self, value):
+        tamias_wait_for_step(&self._space)
+        self._space.soft.speculative = (-1.0 if value is None
+                                        else _soft_nonneg(value, "speculative_distance"))
 
     @property
     def gravity(self):

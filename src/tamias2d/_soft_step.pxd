@@ -1,0 +1,90 @@
+# The soft solver (Space.solver = "soft"): Box2D v3's "soft step" re-thought
+# for Chipmunk's API and units. See _soft_step.pyx for the step; the shared
+# stages (collision, arbiter cache, components and sleeping, callbacks) are
+# _space_step's.
+#
+# cpSoftStep is a pipeline, in this order:
+#   StageResetArbiters, StageCollide (speculative margin),
+#   cpSpaceProcessComponents, StageFilterArbiterCache   (shared)
+#   SoftGatherBodies        awake bodies into a contiguous SoftBody array
+#   SoftPrepareJoints       joint pre-solve callbacks, warm-start rescale
+#   SoftPrepareContacts     arbiters into a contiguous SoftContact array
+#   per substep (h = dt / substeps):
+#     SoftIntegrateVelocities  gravity, damping, forces, velocity_func
+#     SoftWarmStart            last substep's impulses (joints, contacts)
+#     SoftSolve(useBias=1)     soft contacts, joints
+#     SoftIntegratePositions   position_func, delta position / rotation
+#     SoftRelax                SoftSolve without bias (rigid)
+#   SoftApplyRestitution, SoftStoreImpulses, SoftFinishBodies
+#   StagePostSolve, unlock (post-step callbacks)              (shared)
+from tamias2d._config cimport cpFloat, cpBool
+from tamias2d._structs cimport cpSpace, cpBody, cpArbiter, cpSoftSettings, cpSoftScratch
+from tamias2d.vector cimport cpVect
+
+# Defaults (DESIGN.md "Two solvers"; Box2D v3's values, lengths expressed in
+# collision_slop so that a scaled scene behaves the same).
+cdef enum:
+    SOFT_DEFAULT_SUBSTEPS = 4
+cdef const cpFloat SOFT_DEFAULT_CONTACT_HERTZ = 30.0
+cdef const cpFloat SOFT_DEFAULT_CONTACT_DAMPING_RATIO = 10.0
+# Max push-out speed = this x collision_slop per second (60 units/s for the
+# default slop 0.1; Box2D's 3 m/s is 600 of its 0.005 m slops per second).
+cdef const cpFloat SOFT_PUSH_OUT_PER_SLOP = 600.0
+# Speculative distance = this x collision_slop (Box2D: 4 linear slops).
+cdef const cpFloat SOFT_SPECULATIVE_PER_SLOP = 4.0
+
+# Flags of a SoftBody.
+cdef enum:
+    SOFT_BODY_DEFAULT_VELOCITY = 1   # velocity_func is cpBodyUpdateVelocity
+    SOFT_BODY_DEFAULT_POSITION = 2   # position_func is cpBodyUpdatePosition
+    SOFT_BODY_KINEMATIC = 4
+    SOFT_BODY_JOINTED = 8            # in a joint: cpBody kept current per substep
+
+# One awake body during a soft step. Slot 0 stands for every body the step
+# does not move (static, sleeping, removed): zero velocity, infinite mass.
+cdef struct SoftBody:
+    cpFloat vx, vy, w
+    cpFloat m_inv, i_inv
+    cpFloat dpx, dpy          # centre displacement since the step began
+    cpFloat qc, qs            # rotation since the step began (cos, sin)
+    cpBody *body
+    int flags
+
+# One contact point: anchors from the centres of gravity (fixed for the
+# step), the separation with the anchors' offset removed (Box2D's adjusted
+# separation), masses and impulses.
+cdef struct SoftPoint:
+    cpFloat rAx, rAy, rBx, rBy
+    cpFloat baseSeparation
+    cpFloat normalMass, tangentMass
+    cpFloat normalImpulse, tangentImpulse     # this substep's (warm start)
+    cpFloat totalNormal, totalTangent         # over the step (-> jnAcc, jtAcc)
+    cpFloat maxNormalImpulse
+    cpFloat relativeVelocity                  # normal speed at the step's start
+
+# One arbiter's contact constraint, prepared once per step.
+cdef struct SoftContact:
+    int ia, ib                # SoftBody slots
+    int count                 # 1 or 2 points
+    cpFloat nx, ny
+    cpFloat friction, restitution
+    cpFloat surfaceT          # surface velocity along the tangent
+    cpFloat biasRate, massScale, impulseScale
+    SoftPoint p[2]
+    cpArbiter *arb
+
+# b2MakeSoft: stiffness `hertz` and damping ratio `zeta` at step h.
+cdef struct SoftSoftness:
+    cpFloat biasRate
+    cpFloat massScale
+    cpFloat impulseScale
+
+cdef SoftSoftness SoftMakeSoft(cpFloat hertz, cpFloat zeta, cpFloat h) noexcept nogil
+
+cdef void SoftSettingsInit(cpSoftSettings *settings) noexcept nogil
+cdef void SoftScratchFree(cpSoftScratch *scratch) noexcept nogil
+# The effective settings (the automatic ones derived from collision_slop).
+cdef cpFloat SoftPushOut(const cpSpace *space) noexcept nogil
+cdef cpFloat SoftSpeculative(const cpSpace *space) noexcept nogil
+
+cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil

@@ -1,0 +1,481 @@
+"""The soft solver (``Space.solver = "soft"``): known answers, scene meaning,
+hard cases, determinism, copy/pickle and bad input.
+
+Criteria, written before the runs:
+  * free flight and a constant torque are exactly semi-implicit Euler with
+    h = dt / substeps (bit for bit against the same arithmetic in Python);
+  * head-on equal circles: e = 1 swaps the velocities, e = 0 leaves a
+    relative speed below 2% of the approach speed (tolerance 2%);
+  * a box sliding down a 20 degree incline with mu = 0.2 (mu < tan 20) has a
+    mean acceleration g (sin - mu cos) within 5%; with mu = 0.6 it moves less
+    than 0.5 units in 2 s;
+  * the hard cases never go NaN or raise in the soft solver, and the ones in
+    SOFT_PASSES (what docs/stability.md reports) pass;
+  * the same scene gives the same bits twice; a copy or a pickle continues bit
+    for bit;
+  * settings are validated (ValueError), the solver cannot change during a
+    step (SpaceLocked);
+  * the chipmunk solver's bits do not depend on the soft settings.
+"""
+import math
+import pickle
+
+import pytest
+
+import tamias2d
+from tamias2d.errors import SpaceLocked
+
+import hard_cases as hc
+
+DT = 1.0 / 60.0
+
+
+def soft_space(**settings):
+    s = tamias2d.Space(solver="soft")
+    for k, v in settings.items():
+        setattr(s, k, v)
+    return s
+
+
+# -- known answers --------------------------------------------------------------------------
+
+@pytest.mark.parametrize("substeps", [1, 4, 7])
+def test_free_flight_is_semi_implicit_euler(substeps):
+    s = soft_space(substeps=substeps)
+    s.gravity = 3.0, -900.0
+    b = tamias2d.Body(2.0, 5.0)
+    b.position = 1.0, 2.0
+    b.velocity = 10.0, 20.0
+    s.add(b, tamias2d.Circle(b, 1.0))
+    x, y, vx, vy = 1.0, 2.0, 10.0, 20.0
+    h = DT / substeps
+    for _ in range(30):
+        s.step(DT)
+        for _ in range(substeps):
+            vx = vx * 1.0 + (3.0 + 0.0 * 0.5) * h
+            vy = vy * 1.0 + (-900.0 + 0.0 * 0.5) * h
+            x = x + vx * h
+            y = y + vy * h
+    assert (b.velocity.x, b.velocity.y) == (vx, vy)
+    assert (b.position.x, b.position.y) == (x, y)
+
+
+def test_constant_torque_is_semi_implicit_euler():
+    s = soft_space(substeps=4)
+    b = tamias2d.Body(1.0, 4.0)
+    s.add(b, tamias2d.Circle(b, 1.0))
+    w = a = 0.0
+    h = DT / 4
+    for _ in range(20):
+        b.torque = 2.0  # a force lasts one step, as in pymunk
+        s.step(DT)
+        for _ in range(4):
+            w = w * 1.0 + 2.0 * 0.25 * h
+            a = a + w * h
+    assert b.angular_velocity == w
+    assert b.angle == a
+    assert b.torque == 0.0
+
+
+def _head_on(e):
+    s = soft_space()
+    bodies = []
+    for x, v in ((-20.0, 100.0), (20.0, -100.0)):
+        b = tamias2d.Body(1.0, tamias2d.moment_for_circle(1.0, 0, 5))
+        b.position = x, 0.0
+        b.velocity = v, 0.0
+        c = tamias2d.Circle(b, 5.0)
+        c.elasticity = math.sqrt(e)  # Chipmunk multiplies the two
+        s.add(b, c)
+        bodies.append(b)
+    for _ in range(30):
+        s.step(DT)
+    return bodies
+
+
+def test_head_on_elastic_swaps_velocities():
+    a, b = _head_on(1.0)
+    assert a.velocity.x == pytest.approx(-100.0, rel=0.02)
+    assert b.velocity.x == pytest.approx(100.0, rel=0.02)
+
+
+def test_head_on_inelastic_sticks():
+    a, b = _head_on(0.0)
+    assert abs(a.velocity.x - b.velocity.x) < 2.0
+    assert abs(a.velocity.x + b.velocity.x) < 1e-9  # momentum: symmetric
+
+
+def _incline(mu, angle_deg=20.0, seconds=1.0):
+    s = soft_space()
+    g = 900.0
+    s.gravity = 0.0, -g
+    th = math.radians(angle_deg)
+    d = (math.cos(th), -math.sin(th))
+    ramp = tamias2d.Segment(s.static_body, (-400 * d[0], -400 * d[1]), (400 * d[0], 400 * d[1]), 1.0)
+    ramp.friction = 1.0
+    s.add(ramp)
+    body = tamias2d.Body(1.0, hc.box_moment(1.0, 20, 20))
+    nrm = (math.sin(th), math.cos(th))  # the ramp's upward normal
+    body.position = nrm[0] * 11.0, nrm[1] * 11.0
+    body.angle = -th
+    box = tamias2d.Poly.create_box(body, (20, 20))
+    box.friction = mu
+    s.add(body, box)
+    for _ in range(30):  # settle
+        s.step(DT)
+    p0 = body.position
+    v0 = body.velocity.dot(d)
+    n = int(round(seconds / DT))
+    for _ in range(n):
+        s.step(DT)
+    travel = (body.position - p0).dot(d)
+    t = n * DT
+    # travel = v0 t + a t^2 / 2
+    return 2.0 * (travel - v0 * t) / (t * t), travel, g, th
+
+
+def test_incline_acceleration():
+    acc, _, g, th = _incline(0.2)
+    expected = g * (math.sin(th) - 0.2 * math.cos(th))
+    assert acc == pytest.approx(expected, rel=0.05)
+
+
+def test_incline_box_with_enough_friction_stays():
+    _, travel, _, _ = _incline(0.6, seconds=2.0)
+    assert abs(travel) < 0.5
+
+
+# -- scene meaning ---------------------------------------------------------------------------
+
+def _ball_on_ground(solver="soft"):
+    s = tamias2d.Space(solver=solver)
+    s.gravity = 0, -900
+    ground = tamias2d.Segment(s.static_body, (-100, 0), (100, 0), 1.0)
+    ground.friction = 1.0
+    s.add(ground)
+    b = tamias2d.Body(2.0, 100.0)
+    b.position = 0, 7
+    c = tamias2d.Circle(b, 6.0)
+    c.friction = 0.5
+    s.add(b, c)
+    return s, b, c, ground
+
+
+def test_resting_contact_total_impulse_and_point_set():
+    s, b, c, ground = _ball_on_ground()
+    seen = []
+
+    def post(arb, space, data):
+        seen.append((arb.total_impulse, arb.contact_point_set, arb.friction))
+
+    s.on_collision(None, None, post_solve=post)
+    for _ in range(120):
+        s.step(DT)
+    imp, cps, friction = seen[-1]
+    # the ground carries the weight: impulse per step m g dt (within 2%)
+    assert abs(imp.y) == pytest.approx(2.0 * 900 * DT, rel=0.02)
+    assert len(cps.points) == 1
+    assert friction == pytest.approx(0.5)  # product mixing
+    assert abs(cps.points[0].distance) < 0.3
+
+
+def test_pre_solve_can_ignore_and_sensors_pass_through():
+    s, b, c, ground = _ball_on_ground()
+    s.on_collision(None, None, pre_solve=lambda arb, space, data: setattr(arb, "process_collision", False))
+    for _ in range(60):
+        s.step(DT)
+    assert b.position.y < -50
+    s, b, c, ground = _ball_on_ground()
+    c.sensor = True
+    for _ in range(60):
+        s.step(DT)
+    assert b.position.y < -50
+
+
+def test_begin_and_separate_called():
+    s, b, c, ground = _ball_on_ground()
+    calls = []
+    s.on_collision(None, None, begin=lambda *a: calls.append("begin"),
+                   separate=lambda *a: calls.append("separate"))
+    for _ in range(30):
+        s.step(DT)
+    b.velocity = 0, 2000
+    for _ in range(30):
+        s.step(DT)
+    assert calls == ["begin", "separate"]
+
+
+def test_surface_velocity_drives_a_box():
+    s, b, c, ground = _ball_on_ground()
+    ground.surface_velocity = (50.0, 0.0)
+    for _ in range(120):
+        s.step(DT)
+    assert b.velocity.x > 10.0
+
+
+def test_kinematic_platform_carries_a_box():
+    s = soft_space()
+    s.gravity = 0, -900
+    plat = tamias2d.Body(body_type=tamias2d.Body.KINEMATIC)
+    plat.velocity = 0, 30
+    s.add(plat, tamias2d.Poly.create_box(plat, (200, 10)))
+    box = tamias2d.Body(1, hc.box_moment(1, 20, 20))
+    box.position = 0, 15.5
+    s.add(box, tamias2d.Poly.create_box(box, (20, 20)))
+    for _ in range(120):
+        s.step(DT)
+    assert plat.position.y == pytest.approx(60.0)
+    assert box.position.y - plat.position.y == pytest.approx(15.0, abs=0.5)
+
+
+def test_speculative_contacts_stop_fast_ball_before_overlap():
+    worst = {}
+    for solver in ("chipmunk", "soft"):
+        s, b, c, ground = _ball_on_ground(solver)
+        b.position = 0, 30
+        b.velocity = 0, -600  # 10 per step
+        deepest = 0.0
+        for _ in range(60):
+            s.step(DT)
+            deepest = max(deepest, 7.0 - b.position.y)
+        worst[solver] = deepest
+    assert worst["soft"] < 0.5
+    assert worst["soft"] < worst["chipmunk"]
+
+
+def test_sleeping_in_soft_solver():
+    s, b, c, ground = _ball_on_ground()
+    s.sleep_time_threshold = 0.5
+    for _ in range(240):
+        s.step(DT)
+    assert b.is_sleeping
+    b.apply_impulse_at_local_point((0, 5000))
+    s.step(DT)
+    assert not b.is_sleeping
+
+
+def test_pin_joint_pendulum_keeps_its_length():
+    s = soft_space()
+    s.gravity = 0, -900
+    bob = tamias2d.Body(1, 10)
+    bob.position = 100, 0
+    s.add(bob, tamias2d.Circle(bob, 5))
+    s.add(tamias2d.PinJoint(s.static_body, bob, (0, 0), (0, 0)))
+    for _ in range(300):
+        s.step(DT)
+        assert abs(bob.position.length - 100.0) < 1.0
+
+
+def _chain(solver):
+    s = tamias2d.Space(solver=solver)
+    s.gravity = 0, -900
+    prev = s.static_body
+    links = []
+    for i in range(5):
+        b = tamias2d.Body(1, 100)
+        b.position = 20 * i + 10, 0
+        s.add(b, tamias2d.Segment(b, (-10, 0), (10, 0), 2))
+        s.add(tamias2d.PivotJoint(prev, b, (20 * i, 0)))
+        prev = b
+        links.append(b)
+    worst = 0.0
+    for _ in range(300):
+        s.step(DT)
+        for a, b in zip(links, links[1:]):
+            worst = max(worst, (a.local_to_world((10, 0)) - b.local_to_world((-10, 0))).length)
+    return worst
+
+
+def test_pivot_chain_holds_at_least_as_well_as_chipmunk():
+    # the links' segments also collide at the joints (collide_bodies): both
+    # solvers stretch, the soft one (joints per substep) less
+    soft = _chain("soft")
+    assert soft < _chain("chipmunk")
+    assert soft < 0.25 * 20
+
+
+def test_motor_reaches_its_rate():
+    s = soft_space()
+    wheel = tamias2d.Body(1, 100)
+    s.add(wheel, tamias2d.Circle(wheel, 5))
+    s.add(tamias2d.PivotJoint(s.static_body, wheel, (0, 0)))
+    motor = tamias2d.SimpleMotor(s.static_body, wheel, 3.0)
+    motor.max_force = 1e6
+    s.add(motor)
+    for _ in range(60):
+        s.step(DT)
+    assert abs(wheel.angular_velocity) == pytest.approx(3.0, rel=1e-6)  # pymunk's sign: -rate
+
+
+def test_motor_max_force_is_a_force():
+    # max_force bounds the torque per substep impulse (max_force h), so the
+    # acceleration is max_force / moment as in the chipmunk solver
+    s = soft_space()
+    wheel = tamias2d.Body(1, 100)
+    s.add(wheel, tamias2d.Circle(wheel, 5))
+    s.add(tamias2d.PivotJoint(s.static_body, wheel, (0, 0)))
+    motor = tamias2d.SimpleMotor(s.static_body, wheel, 1000.0)
+    motor.max_force = 50.0
+    s.add(motor)
+    for _ in range(60):
+        s.step(DT)
+    assert abs(wheel.angular_velocity) == pytest.approx(50.0 / 100 * 1.0, rel=1e-6)
+    assert motor.impulse == pytest.approx(50.0 * DT, rel=1e-9)
+
+
+# -- hard cases -----------------------------------------------------------------------------
+
+# The cases the soft solver passes at its defaults in CI lengths (docs/stability.md).
+SOFT_PASSES = {
+    "mass_ratio_10", "far_1e6", "poly_collinear", "poly_duplicate", "poly_sliver",
+    "poly_1000_tube", "zero_radius_floor", "coincident_circles", "near_coincident_polys",
+    "long_run", "elastic_gas", "tunnel",
+}
+
+
+@pytest.mark.parametrize("name", list(hc.CASES))
+def test_hard_case_in_soft_solver(name):
+    r = hc.run_case(tamias2d, hc.CASES[name], solver="soft")
+    assert not r.error and not r.nan, (r.error, r.metrics)
+    if name in SOFT_PASSES:
+        assert r.passed, r.metrics
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1e3])
+def test_scaled_scene_behaves_the_same(scale):
+    # lengths, gravity and collision_slop scaled: the soft settings follow
+    def run(s):
+        sc = hc.build_pyramid(tamias2d, rows=5, s=s)
+        sc.space.solver = "soft"
+        sc.space.collision_slop = 0.1 * s
+        for _ in range(300):
+            sc.space.step(DT)
+        return [(b.position.x / s, b.position.y / s) for b in sc.watch["boxes"]]
+    ref = run(1.0)
+    got = run(scale)
+    worst = max(math.hypot(a[0] - b[0], a[1] - b[1]) for a, b in zip(ref, got))
+    assert worst < 1e-3 * 20
+
+
+def test_far_from_origin_behaves_the_same():
+    def run(off):
+        sc = hc.build_pyramid(tamias2d, rows=5, off=(off, off))
+        sc.space.solver = "soft"
+        for _ in range(300):
+            sc.space.step(DT)
+        return [(b.position.x - off, b.position.y - off) for b in sc.watch["boxes"]]
+    ref = run(0.0)
+    got = run(1e6)
+    worst = max(math.hypot(a[0] - b[0], a[1] - b[1]) for a, b in zip(ref, got))
+    assert worst < 0.05 * 20
+
+
+# -- determinism, copy, pickle ------------------------------------------------------------------
+
+def _busy_scene():
+    sc = hc.build_pyramid(tamias2d, rows=6)
+    s = sc.space
+    s.solver = "soft"
+    s.substeps = 3
+    b = tamias2d.Body(1, 10)
+    b.position = 0, 300
+    s.add(b, tamias2d.Circle(b, 8))
+    s.add(tamias2d.DampedSpring(s.static_body, b, (0, 400), (0, 0), 50, 20, 1))
+    return s
+
+
+def test_same_bits_twice():
+    a, b = _busy_scene(), _busy_scene()
+    for _ in range(200):
+        a.step(DT)
+        b.step(DT)
+    assert hc.state_hash(a) == hc.state_hash(b)
+
+
+@pytest.mark.parametrize("how", ["copy", "pickle"])
+def test_copy_continues_bit_for_bit(how):
+    s = _busy_scene()
+    s.contact_hertz = 25.0
+    s.contact_push_out = 40.0
+    for _ in range(60):
+        s.step(DT)
+    twin = s.copy() if how == "copy" else pickle.loads(pickle.dumps(s))
+    assert (twin.solver, twin.substeps, twin.contact_hertz, twin.contact_push_out) == \
+        ("soft", 3, 25.0, 40.0)
+    for _ in range(120):
+        s.step(DT)
+        twin.step(DT)
+    assert hc.state_hash(s) == hc.state_hash(twin)
+
+
+def test_chipmunk_bits_ignore_soft_settings():
+    a = hc.build_pyramid(tamias2d, rows=6).space
+    b = hc.build_pyramid(tamias2d, rows=6).space
+    b.substeps = 9
+    b.contact_hertz = 5.0
+    b.speculative_distance = 3.0
+    b.contact_push_out = 1.0
+    for _ in range(100):
+        a.step(DT)
+        b.step(DT)
+    assert hc.state_hash(a) == hc.state_hash(b)
+
+
+# -- bad input ---------------------------------------------------------------------------------
+
+def test_unknown_solver():
+    with pytest.raises(ValueError, match="'chipmunk', 'soft'"):
+        tamias2d.Space(solver="box2d")
+    s = tamias2d.Space()
+    for bad in ("Soft", "", None, 1):
+        with pytest.raises(ValueError, match="'chipmunk', 'soft'"):
+            s.solver = bad
+    assert s.solver == "chipmunk"
+
+
+@pytest.mark.parametrize("bad", [0, -1, 1.5, True, "4", None])
+def test_bad_substeps(bad):
+    s = soft_space()
+    with pytest.raises(ValueError):
+        s.substeps = bad
+    assert s.substeps == 4
+
+
+@pytest.mark.parametrize("attr", ["contact_hertz", "contact_damping_ratio", "contact_push_out",
+                                  "speculative_distance"])
+@pytest.mark.parametrize("bad", [float("nan"), float("inf"), -1.0, -1e-300, "x", True])
+def test_bad_soft_settings(attr, bad):
+    s = soft_space()
+    before = getattr(s, attr)
+    with pytest.raises(ValueError):
+        setattr(s, attr, bad)
+    assert getattr(s, attr) == before
+
+
+def test_solver_change_refused_during_step():
+    s, b, c, ground = _ball_on_ground()
+    errors = []
+
+    def pre(arb, space, data):
+        try:
+            space.solver = "chipmunk"
+        except SpaceLocked as exc:
+            errors.append(exc)
+
+    s.on_collision(None, None, pre_solve=pre)
+    for _ in range(20):
+        s.step(DT)
+    assert errors and s.solver == "soft"
+
+
+def test_nothing_goes_nan_with_extreme_settings():
+    for settings in ({"contact_hertz": 0.0}, {"contact_hertz": 1e9}, {"contact_damping_ratio": 0.0},
+                     {"contact_push_out": 0.0}, {"speculative_distance": 0.0},
+                     {"speculative_distance": 1e6}, {"substeps": 64}):
+        sc = hc.build_pyramid(tamias2d, rows=5)
+        sc.space.solver = "soft"
+        for k, v in settings.items():
+            setattr(sc.space, k, v)
+        for _ in range(60):
+            sc.space.step(DT)
+        assert hc.all_finite(sc.space), settings
