@@ -501,6 +501,8 @@ cdef int _decompose(cpVect *verts, Py_ssize_t count, cpFloat tol, list out) exce
     # entries) is taken over and freed.
     cdef Piece *stack = <Piece *>malloc(16 * sizeof(Piece))
     cdef Py_ssize_t size = 0, capacity = 16
+    # A simple polygon needs about one split per reflex vertex; many more
+    # mean Munk2D's recursion would never end.
     cdef Py_ssize_t splits = 0, max_splits = 8 * count + 256
     cdef Py_ssize_t i, sub1_count, sub2_count, steiner_i, k
     cdef cpVect *hull = NULL
@@ -538,9 +540,10 @@ cdef int _decompose(cpVect *verts, Py_ssize_t count, cpFloat tol, list out) exce
                     if steiner_it >= 0.0:
                         splits += 1
                         if splits > max_splits:
+                            # Munk2D recurses until the C stack overflows
                             raise IllegalPolyline(
                                 "convex_decomposition does not converge on this polygon "
-                                "(self-intersecting or degenerate?)")
+                                "(a repeated vertex, or self-intersecting?)")
                         steiner_i = <Py_ssize_t>steiner_it
                         # verts[count] is the closing vertex, a copy of verts[0]
                         steiner = cpvlerp(verts[steiner_i], verts[Next(steiner_i, count)],
