@@ -26,7 +26,7 @@ LAYERS = [
     ["_soft_step"],
     ["_space_query"],
     ["space"],
-    ["_snapshot", "batch", "_step_spaces"],
+    ["_snapshot", "batch", "_step_spaces", "autogeometry"],
     ["_testing"],
 ]
 RANK = {name: i for i, layer in enumerate(LAYERS) for name in layer}

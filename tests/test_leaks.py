@@ -186,6 +186,35 @@ def cycle_errors(t, state):
             pass
 
 
+def cycle_autogeometry(t, state):
+    """Marching squares and the polyline functions, with their error paths
+    (a sample function that raises midway, refused polylines)."""
+    from tamias2d import autogeometry as ag
+    img = [[((i * 7 + j * 13) % 10) / 10 for i in range(40)] for j in range(40)]
+    lines = ag.march_soft((0, 0, 39, 39), 40, 40, 0.45, lambda p: img[int(p[1])][int(p[0])])
+    ag.march_hard((0, 0, 39, 39), 40, 40, 0.45, lambda p: img[int(p[1])][int(p[0])])
+    for line in lines:
+        ag.simplify_curves(line, 0.5)
+        ag.simplify_vertexes(line, 0.2)
+        ag.to_convex_hull(line, 0.1)
+        if ag.is_closed(line) and t.area_for_poly(line) >= 0:
+            ag.convex_decomposition(line, 0.1)
+
+    def failing(p):
+        # fails on the second row, with a 40 KB row buffer and the first
+        # row's polylines allocated
+        if p[1] > 0:
+            raise KeyError(p)
+        return (p[0] * 0.37) % 1.0
+    for call in (lambda: ag.march_soft((0, 0, 4999, 99), 5000, 100, 0.45, failing),
+                 lambda: ag.convex_decomposition([(0, 0), (1, 1), (1, 0), (0, 0)], 0.1),
+                 lambda: ag.simplify_curves([(0, 0), (1, 0)], float("nan"))):
+        try:
+            call()
+        except (KeyError, ValueError):
+            pass
+
+
 def cycle_leaky(t, state):
     """A deliberate leak, to show the checker finds one: a Python object
     and 16 KiB of C memory per cycle."""
@@ -224,7 +253,7 @@ def measure(name, cycles, warmup):
 # -- pytest side -----------------------------------------------------------------------------
 
 CYCLES = {"space": 300, "spatial_hash": 300, "callbacks": 300, "churn": 600,
-          "loose_objects": 1500, "errors": 600, "leaky": 300}
+          "loose_objects": 1500, "errors": 600, "autogeometry": 150, "leaky": 300}
 
 
 def _run(name, cycles=None, warmup=None):

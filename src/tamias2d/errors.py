@@ -14,7 +14,7 @@ __all__ = [
     "UnsolvableCollision",
     "CollisionContactOverflow", "SameVertices", "CollisionError",
     "SpaceLocked", "AlreadyInSpace", "NotInSpace", "CallbackError",
-    "IllegalCollisionType", "CopyError",
+    "IllegalCollisionType", "CopyError", "IllegalPolyline",
     "HighIterWarning",
 ]
 
@@ -122,6 +122,13 @@ class CopyError(Tamias2DError, ValueError, AssertionError):
     pickle from another tamias2d version or build, a corrupt state, or a copy
     that reaches the object being copied from that object's own state (a
     circular reference, which pymunk also refuses with an AssertionError)."""
+
+
+class IllegalPolyline(Tamias2DError, ValueError, AssertionError):
+    """A polyline an autogeometry function cannot use: too few vertices, a
+    non-finite tolerance, an open or clockwise polygon where a closed
+    counter-clockwise one is needed (pymunk asserts there too), or a polygon
+    whose decomposition does not converge."""
 
 
 class CallbackError(Tamias2DError, RuntimeError):
