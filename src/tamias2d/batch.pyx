@@ -1049,10 +1049,13 @@ def set_space_bodies(space, fields, buffers):
     must hold at least as many values as the space's bodies need, and those
     must be finite (ValueError and IllegalBody; nothing is written then).
 
-    As in pymunk, writing to a sleeping body wakes its whole component while
-    the bodies are visited: of that component only the first two bodies are
-    written, and the next sleeping component may be passed over (the values
-    are still taken in order). Wake the bodies first to write every one.
+    As in pymunk, writing to a sleeping body wakes its whole component in
+    the middle of Munk2D's walk over the sleeping components, which upsets
+    the walk: of such a component only the first two bodies are written,
+    the values meant for its other bodies go to the bodies visited next, and
+    about half of the sleeping components are passed over. To write every
+    body of a space with sleeping bodies, wake them (``body.activate()``),
+    then read with :func:`get_space_bodies` and write.
 
     >>> import array, tamias2d
     >>> from tamias2d.batch import Buffer, BodyFields, set_space_bodies
