@@ -114,8 +114,9 @@ def test_tamias2d_run_passes_arguments_and_exit_status(tmp_path):
 EXAMPLES = ["arrows.py", "balls_and_lines.py", "bouncing_balls.py", "box2d_pyramid.py",
             "breakout.py", "camera.py", "collisions.py", "colors.py", "constraints.py",
             "contact_and_no_flipy.py", "contact_with_friction.py", "copy_and_pickle.py",
-            "damped_rotary_spring_pointer.py", "deformable.py", "flipper.py", "platformer.py",
-            "playground.py", "point_query.py", "slide_and_pinjoint.py", "tank.py", "using_sprites.py"]
+            "damped_rotary_spring_pointer.py", "deformable.py", "flipper.py", "planet.py",
+            "platformer.py", "playground.py", "point_query.py", "slide_and_pinjoint.py",
+            "tank.py", "using_sprites.py"]
 
 
 def _examples_dir():
@@ -123,9 +124,11 @@ def _examples_dir():
     return pathlib.Path(pymunk.__file__).parent / "examples"
 
 
-def _state(engine, example, frames):
+def _state(engine, example, frames, keys=""):
+    env = dict(os.environ, RUN_PYMUNK_KEYS=keys)
     r = subprocess.run([sys.executable, str(RUNNER), engine, example, str(frames)],
-                       capture_output=True, text=True, timeout=300, cwd=_examples_dir())
+                       capture_output=True, text=True, timeout=300, cwd=_examples_dir(),
+                       env=env)
     lines = [ln for ln in r.stdout.splitlines() if ln.startswith("STATE ")]
     assert lines, f"{example} on {engine} printed no state:\n{r.stderr[-2000:]}"
     return lines[-1]
@@ -138,3 +141,16 @@ def test_pymunk_example_runs_unchanged_with_pymunks_numbers(example):
         pytest.skip(f"pymunk's examples have no {example}")
     frames = 60
     assert _state("tamias2d", example, frames) == _state("pymunk", example, frames)
+
+
+def test_planet_with_batched_drawing_and_updates():
+    # planet.py starts with pymunk.batch switched off; the keys d and u turn
+    # on batched drawing (get_space_bodies) and batched gravity
+    # (set_space_bodies), which changes the motion.
+    pytest.importorskip("pygame")
+    pytest.importorskip("numpy")
+    if not (_examples_dir() / "planet.py").exists():
+        pytest.skip("pymunk's examples have no planet.py")
+    batched = _state("tamias2d", "planet.py", 60, keys="d u")
+    assert batched == _state("pymunk", "planet.py", 60, keys="d u")
+    assert batched != _state("tamias2d", "planet.py", 60)

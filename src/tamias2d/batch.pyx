@@ -1,7 +1,7 @@
-# Batch access to the bodies and arbiters of a space as NumPy arrays.
+# Batch access to the bodies and arbiters of a space as NumPy arrays, and
+# pymunk's batch API (pymunk.batch: flag enums and buffers that the caller
+# wraps in NumPy) beside it, sharing the per-body C loops.
 #
-# pymunk offers the same service in pymunk.batch (flag enums and cffi buffers
-# that the caller wraps in NumPy); here the arrays are NumPy from the start.
 # NumPy is imported on first use, never at module import, so the engine runs
 # without it. The loops are C loops over the Python dicts of the space
 # (PyDict_Next hands out borrowed pointers, no Python object is made per body)
@@ -33,29 +33,63 @@ Writes go through the same C functions as the Body setters: a position moves
 the body's origin (the centre of gravity follows), every write wakes a
 sleeping body, and the fields are written in the order given. Values must be
 finite; nothing is written when one is not.
+
+pymunk's batch API is here as well, with pymunk 7.3's names and numbers, so
+programs written for ``pymunk.batch`` run unchanged: the flags
+:class:`BodyFields` and :class:`ArbiterFields` choose the fields, a
+:class:`Buffer` collects C doubles and ``uintptr_t`` integers, and
+:func:`get_space_bodies`, :func:`set_space_bodies` and
+:func:`get_space_arbiters` append to it or read it, in Munk2D's order of the
+bodies (all of them, ``space.static_body`` too once used) and of its arbiter
+cache. Continuing the example above:
+
+>>> from tamias2d.batch import Buffer, BodyFields, get_space_bodies, set_space_bodies
+>>> data = Buffer()
+>>> get_space_bodies(space, BodyFields.BODY_ID | BodyFields.POSITION, data)
+>>> list(memoryview(data.int_buf()).cast("P")) == [b.id for b in space.bodies]
+True
+>>> list(memoryview(data.float_buf()).cast("d"))
+[0.0, 0.0, 1.0, 2.0, 2.0, 4.0]
+>>> import numpy
+>>> data.set_float_buf(numpy.array([5.0, 0.0, 6.0, 0.0, 7.0, 0.0]))
+>>> set_space_bodies(space, BodyFields.VELOCITY, data)
+>>> [b.velocity.x for b in space.bodies]
+[5.0, 6.0, 7.0]
 """
 from cpython.dict cimport PyDict_Next
 from cpython.object cimport PyObject
 from libc.stdint cimport uintptr_t, int64_t, uint64_t
-from libc.stdlib cimport malloc, free
+from libc.stdlib cimport malloc, calloc, realloc, free
+from libc.string cimport memcpy, memset
 from libc.math cimport NAN
+from cpython.buffer cimport (PyObject_GetBuffer, PyBuffer_Release, PyBuffer_FillInfo,
+    PyBUF_C_CONTIGUOUS, PyBUF_WRITABLE)
+cimport cython
 
-from tamias2d._structs cimport cpBody, cpShape, cpArbiter, cpArray, cpContactPointSet
+from tamias2d._structs cimport cpBody, cpShape, cpSpace, cpArbiter, cpArray, cpContactPointSet
 from tamias2d.vector cimport cpVect, cpv
 from tamias2d.body cimport (Body, cpBodyGetPosition, cpBodySetPosition, cpBodySetAngle,
     cpBodySetVelocity, cpBodySetAngularVelocity, cpBodySetForce, cpBodySetTorque)
 from tamias2d.shape cimport Shape
-from tamias2d.space cimport Space
+from tamias2d.space cimport Space, cpSpaceEachBody
+from tamias2d._containers cimport cpHashSetEach
 from tamias2d._threadguard cimport tamias_wait_for_step
 from tamias2d.arbiter cimport (cpArbiterGetBodies, cpArbiterGetShapes,
     cpArbiterGetContactPointSet, cpArbiterTotalImpulse, cpArbiterTotalKE,
-    cpArbiterIsFirstContact)
+    cpArbiterIsFirstContact, cpArbiterGetCount, cpArbiterGetNormal, cpArbiterGetPointA,
+    cpArbiterGetPointB, cpArbiterGetDepth)
+
+import enum as _enum
+import sys
 
 from tamias2d.errors import IllegalBody
 
 __all__ = ["BODY_FIELDS", "ARBITER_FIELDS", "get_bodies", "set_bodies", "body_columns",
            "get_body_ids", "get_arbiters", "arbiter_dtype", "get_spaces_bodies",
-           "set_spaces_bodies"]
+           "set_spaces_bodies",
+           # pymunk's batch API
+           "BodyFields", "ArbiterFields", "Buffer", "get_space_bodies", "set_space_bodies",
+           "get_space_arbiters"]
 
 # -- body fields ---------------------------------------------------------------------
 
@@ -123,6 +157,64 @@ cdef Space _space_arg(object space):
     return <Space>space
 
 
+# The C loops of one body, shared by get_bodies/set_bodies and pymunk's
+# get_space_bodies/set_space_bodies: the fields code[0..ncodes) in that order,
+# to or from consecutive doubles. They return the number of doubles used.
+
+cdef int _read_body(const cpBody *body, const int *code, int ncodes, double *out) noexcept nogil:
+    cdef int k, col = 0
+    cdef cpVect p
+    for k in range(ncodes):
+        if code[k] == F_POSITION:
+            p = cpBodyGetPosition(body)
+            out[col] = p.x
+            out[col + 1] = p.y
+            col += 2
+        elif code[k] == F_ANGLE:
+            out[col] = body.a
+            col += 1
+        elif code[k] == F_VELOCITY:
+            out[col] = body.v.x
+            out[col + 1] = body.v.y
+            col += 2
+        elif code[k] == F_ANGULAR_VELOCITY:
+            out[col] = body.w
+            col += 1
+        elif code[k] == F_FORCE:
+            out[col] = body.f.x
+            out[col + 1] = body.f.y
+            col += 2
+        else:
+            out[col] = body.t
+            col += 1
+    return col
+
+
+cdef int _write_body(cpBody *body, const int *code, int ncodes, const double *src) noexcept nogil:
+    # Through the C functions of the Body setters (they wake the body).
+    cdef int k, col = 0
+    for k in range(ncodes):
+        if code[k] == F_POSITION:
+            cpBodySetPosition(body, cpv(src[col], src[col + 1]))
+            col += 2
+        elif code[k] == F_ANGLE:
+            cpBodySetAngle(body, src[col])
+            col += 1
+        elif code[k] == F_VELOCITY:
+            cpBodySetVelocity(body, cpv(src[col], src[col + 1]))
+            col += 2
+        elif code[k] == F_ANGULAR_VELOCITY:
+            cpBodySetAngularVelocity(body, src[col])
+            col += 1
+        elif code[k] == F_FORCE:
+            cpBodySetForce(body, cpv(src[col], src[col + 1]))
+            col += 2
+        else:
+            cpBodySetTorque(body, src[col])
+            col += 1
+    return col
+
+
 def body_columns(fields):
     """The column names of the array :func:`get_bodies` returns for `fields`.
 
@@ -183,38 +275,11 @@ def get_bodies(space, fields, out=None):
     cdef Py_ssize_t pos = 0, row = 0
     cdef PyObject *key
     cdef PyObject *value
-    cdef cpBody *body
-    cdef cpVect p
-    cdef int col
     tamias_wait_for_step(&sp._space)
     while PyDict_Next(sp._bodies, &pos, &key, &value):
         if row >= n:   # cannot happen while we hold the GIL; keeps the writes in bounds
             break
-        body = &(<Body>key)._body
-        col = 0
-        for k in range(ncodes):
-            if code[k] == F_POSITION:
-                p = cpBodyGetPosition(body)
-                view[row, col] = p.x
-                view[row, col + 1] = p.y
-                col += 2
-            elif code[k] == F_ANGLE:
-                view[row, col] = body.a
-                col += 1
-            elif code[k] == F_VELOCITY:
-                view[row, col] = body.v.x
-                view[row, col + 1] = body.v.y
-                col += 2
-            elif code[k] == F_ANGULAR_VELOCITY:
-                view[row, col] = body.w
-                col += 1
-            elif code[k] == F_FORCE:
-                view[row, col] = body.f.x
-                view[row, col + 1] = body.f.y
-                col += 2
-            else:
-                view[row, col] = body.t
-                col += 1
+        _read_body(&(<Body>key)._body, code, ncodes, &view[row, 0])
         row += 1
     return out
 
@@ -271,38 +336,17 @@ def set_bodies(space, values, fields):
                                   f"got {view[i, j]!r}; no body was changed")
     cdef int ncodes = len(codes)
     cdef int code[MAX_FIELDS]
-    cdef int k, col
+    cdef int k
     for k in range(ncodes):
         code[k] = codes[k]
     cdef Py_ssize_t pos = 0, row = 0
     cdef PyObject *key
     cdef PyObject *value
-    cdef cpBody *body
     tamias_wait_for_step(&sp._space)
     while PyDict_Next(sp._bodies, &pos, &key, &value):
         if row >= n:
             break
-        body = &(<Body>key)._body
-        col = 0
-        for k in range(ncodes):
-            if code[k] == F_POSITION:
-                cpBodySetPosition(body, cpv(view[row, col], view[row, col + 1]))
-                col += 2
-            elif code[k] == F_ANGLE:
-                cpBodySetAngle(body, view[row, col])
-                col += 1
-            elif code[k] == F_VELOCITY:
-                cpBodySetVelocity(body, cpv(view[row, col], view[row, col + 1]))
-                col += 2
-            elif code[k] == F_ANGULAR_VELOCITY:
-                cpBodySetAngularVelocity(body, view[row, col])
-                col += 1
-            elif code[k] == F_FORCE:
-                cpBodySetForce(body, cpv(view[row, col], view[row, col + 1]))
-                col += 2
-            else:
-                cpBodySetTorque(body, view[row, col])
-                col += 1
+        _write_body(&(<Body>key)._body, code, ncodes, &view[row, 0])
         row += 1
 
 
@@ -675,3 +719,578 @@ def set_spaces_bodies(spaces, values, fields):
     for s, n in zip(spaces, counts):
         set_bodies(s, arr[start:start + n], fields)
         start += n
+
+
+# -- pymunk's batch API ------------------------------------------------------------------
+# pymunk.batch as pymunk 7.3 has it: flag enums name the fields, a Buffer
+# holds an array of C doubles and one of uintptr_t, and the three functions
+# append to them (or read the doubles) in the order Munk2D visits the space:
+# cpSpaceEachBody (dynamic bodies, static bodies, then each sleeping
+# component) for bodies, the cached-arbiter hash set for arbiters. pymunk's
+# C iterators grow the arrays one value at a time; here the room is made
+# first (the count is known) and the C loop only stores. Unlike pymunk, no
+# call reads or writes outside the arrays.
+
+class BodyFields(_enum.Flag):
+    """The body fields :func:`get_space_bodies` and :func:`set_space_bodies`
+    handle, combined with ``|``. For each body, the fields set are taken in
+    the order of the members: BODY_ID (``Body.id``) goes to the int buffer,
+    the rest to the float buffer (POSITION, VELOCITY and FORCE as x, y;
+    ANGLE, ANGULAR_VELOCITY and TORQUE as one value). ALL is every field.
+    """
+    BODY_ID = 1
+    POSITION = 2
+    ANGLE = 4
+    VELOCITY = 8
+    ANGULAR_VELOCITY = 16
+    FORCE = 32
+    TORQUE = 64
+    ALL = 0xFFFF
+
+
+class ArbiterFields(_enum.Flag):
+    """The arbiter fields :func:`get_space_arbiters` reads, combined with
+    ``|``. For each arbiter, in the order of the members: to the int buffer
+    BODY_A_ID and BODY_B_ID (``Body.id`` of ``arbiter.bodies``),
+    IS_FIRST_CONTACT (1 or 0) and CONTACT_COUNT (0, 1 or 2); to the float
+    buffer TOTAL_IMPULSE (x, y), TOTAL_KE, NORMAL (x, y), and for contact 1
+    and 2 POINT_A_n (x, y), POINT_B_n (x, y) and DISTANCE_n, each 0 when the
+    arbiter has no such contact. ALL is every field.
+    """
+    BODY_A_ID = 1
+    BODY_B_ID = 2
+    TOTAL_IMPULSE = 4
+    TOTAL_KE = 8
+    IS_FIRST_CONTACT = 16
+    NORMAL = 32
+    CONTACT_COUNT = 64
+    POINT_A_1 = 128
+    POINT_B_1 = 256
+    DISTANCE_1 = 512
+    POINT_A_2 = 1024
+    POINT_B_2 = 2048
+    DISTANCE_2 = 4096
+    ALL = 0xFFFF
+
+
+# The body flags after BODY_ID, in member order, and their codes above.
+cdef int _BODY_FLAG_BITS[MAX_FIELDS]
+_BODY_FLAG_BITS[:] = [2, 4, 8, 16, 32, 64]
+cdef int _BODY_FLAG_CODES[MAX_FIELDS]
+_BODY_FLAG_CODES[:] = [F_POSITION, F_ANGLE, F_VELOCITY, F_ANGULAR_VELOCITY, F_FORCE, F_TORQUE]
+
+
+cdef unsigned int _flag_bits(object fields, object cls) except? 0xFFFFFFFF:
+    if not isinstance(fields, cls):
+        raise TypeError(f"fields must be a {cls.__name__} (e.g. {cls.__name__}.ALL), "
+                        f"not {type(fields).__name__}")
+    return <unsigned int>(<unsigned long>fields.value & 0xFFFF)
+
+
+cdef int _body_flag_codes(unsigned int bits, int *code) noexcept:
+    """The float fields of `bits` as codes, in member order; returns how many."""
+    cdef int k, n = 0
+    for k in range(MAX_FIELDS):
+        if bits & _BODY_FLAG_BITS[k]:
+            code[n] = _BODY_FLAG_CODES[k]
+            n += 1
+    return n
+
+
+# -- the memory of a Buffer array ------------------------------------------------------------
+
+@cython.final
+@cython.auto_pickle(False)
+cdef class _Memory:
+    # Bytes that a Buffer array lives in: its own (malloc) or those of the
+    # object given to set_float_buf/set_int_buf (a held Py_buffer, as pymunk
+    # holds it). Exported as unsigned bytes; memoryviews of it keep it alive,
+    # so a view handed out stays valid after the Buffer moves to new memory.
+    cdef char *data
+    cdef Py_ssize_t nbytes
+    cdef Py_ssize_t exports
+    cdef bint borrowed
+    cdef bint readonly
+    cdef Py_buffer src
+
+    def __cinit__(self):
+        self.data = NULL
+        self.nbytes = 0
+        self.exports = 0
+        self.borrowed = False
+        self.readonly = False
+
+    def __dealloc__(self):
+        if self.borrowed:
+            PyBuffer_Release(&self.src)
+        else:
+            free(self.data)
+        self.data = NULL
+
+    def __getbuffer__(self, Py_buffer *view, int flags):
+        PyBuffer_FillInfo(view, self, self.data, self.nbytes, self.readonly, flags)
+        self.exports += 1
+
+    def __releasebuffer__(self, Py_buffer *view):
+        self.exports -= 1
+
+
+cdef _Memory _memory_own(Py_ssize_t nbytes):
+    cdef _Memory m = _Memory.__new__(_Memory)
+    m.data = <char *>calloc(nbytes if nbytes > 0 else 1, 1)
+    if m.data == NULL:
+        raise MemoryError()
+    m.nbytes = nbytes
+    return m
+
+
+cdef _Memory _memory_borrow(object obj):
+    cdef _Memory m = _Memory.__new__(_Memory)
+    try:
+        PyObject_GetBuffer(obj, &m.src, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE)
+    except (BufferError, ValueError, TypeError):   # read-only (bytes, a read-only array)
+        PyObject_GetBuffer(obj, &m.src, PyBUF_C_CONTIGUOUS)
+    m.borrowed = True
+    m.readonly = m.src.readonly
+    m.data = <char *>m.src.buf
+    m.nbytes = m.src.len
+    return m
+
+
+# Buffer formats accepted from set_float_buf and set_int_buf: raw bytes, or
+# items of the array's own C type in native order.
+_BYTE_FORMATS = ("B", "b", "c")
+
+
+cdef int _check_format(object buffer, str what, str letters, Py_ssize_t itemsize) except -1:
+    # Raises unless `buffer` is one C-contiguous block of items of the array's
+    # C type (format letters[0] or one of the same size) or of raw bytes.
+    try:
+        mv = memoryview(buffer)
+    except TypeError:
+        raise TypeError(f"{what} needs an object with the buffer protocol (a NumPy array, "
+                        f"array.array, bytes, ...), not {type(buffer).__name__}") from None
+    fmt = mv.format
+    size = mv.itemsize
+    contiguous = mv.c_contiguous
+    nbytes = mv.nbytes
+    mv.release()
+    native = "<" if sys.byteorder == "little" else ">"
+    letter = fmt[1:] if fmt[:1] in ("@", "=", native) else fmt
+    if letter in _BYTE_FORMATS:
+        if nbytes % itemsize:
+            raise ValueError(f"{what} got {nbytes} bytes, not a whole number of "
+                             f"{itemsize}-byte items")
+    elif not (len(letter) == 1 and letter in letters and size == itemsize):
+        raise TypeError(f"{what} needs items of format {letters[0]!r} ({itemsize} bytes) "
+                        f"or raw bytes, got format {fmt!r} ({size} bytes)")
+    if not contiguous:
+        raise ValueError(f"{what} needs a C-contiguous buffer")
+    return 0
+
+
+@cython.auto_pickle(False)
+cdef class Buffer:
+    """Two growing arrays for the batch functions, as pymunk's
+    ``pymunk.batch.Buffer``: one of C doubles (float_buf) and one of
+    ``uintptr_t`` (int_buf). :func:`get_space_bodies` and
+    :func:`get_space_arbiters` append to them; :meth:`clear` empties them for
+    reuse, which is cheaper than a new Buffer per step.
+
+    >>> import tamias2d.batch
+    >>> data = tamias2d.batch.Buffer()
+    >>> data.set_float_buf(bytes(16))
+    >>> list(memoryview(data.float_buf()).cast("d"))
+    [0.0, 0.0]
+    >>> data.clear()
+    >>> len(data.float_buf()), len(data.int_buf())
+    (0, 0)
+    """
+    cdef _Memory _fmem
+    cdef _Memory _imem
+    cdef Py_ssize_t _fnum   # doubles in use
+    cdef Py_ssize_t _inum   # uintptr_t in use
+
+    def __cinit__(self, *args, **kwargs):
+        if args or kwargs:
+            raise TypeError("Buffer() takes no arguments")
+        self._fmem = _memory_own(4 * sizeof(double))
+        self._imem = _memory_own(4 * sizeof(uintptr_t))
+        self._fnum = 0
+        self._inum = 0
+
+    def clear(self):
+        """Empty both arrays (the memory is kept for the next calls)."""
+        self._fnum = 0
+        self._inum = 0
+        # Memory of an object given to set_*_buf is not written to.
+        if self._fmem.borrowed:
+            self._fmem = _memory_own(4 * sizeof(double))
+        if self._imem.borrowed:
+            self._imem = _memory_own(4 * sizeof(uintptr_t))
+
+    def float_buf(self):
+        """The doubles, as a memoryview of their bytes: use
+        ``memoryview(buf).cast("d")`` or ``numpy.frombuffer(buf)``. It is a
+        view: it sees writes until the array next grows into new memory."""
+        return memoryview(self._fmem)[:self._fnum * <Py_ssize_t>sizeof(double)]
+
+    def set_float_buf(self, buffer):
+        """Make the float array the contents of `buffer` (C doubles, or raw
+        bytes holding them, in one C-contiguous block, e.g. a float64 NumPy
+        array or ``ndarray.tobytes()``). The buffer is used in place, not
+        copied, until a batch call appends (that copies) or :meth:`clear`.
+        """
+        _check_format(buffer, "set_float_buf", "d", sizeof(double))
+        cdef _Memory m = _memory_borrow(buffer)
+        self._fmem = m
+        self._fnum = m.nbytes // <Py_ssize_t>sizeof(double)
+
+    def int_buf(self):
+        """The integers (``uintptr_t``), as a memoryview of their bytes: use
+        ``memoryview(buf).cast("P")`` or ``numpy.frombuffer(buf, numpy.uintp)``."""
+        return memoryview(self._imem)[:self._inum * <Py_ssize_t>sizeof(uintptr_t)]
+
+    def set_int_buf(self, buffer):
+        """Make the int array the contents of `buffer` (``uintptr_t``-sized
+        integers, or raw bytes holding them, in one C-contiguous block), used
+        in place as :meth:`set_float_buf` does."""
+        _check_format(buffer, "set_int_buf", "PQqLlNn", sizeof(uintptr_t))
+        cdef _Memory m = _memory_borrow(buffer)
+        self._imem = m
+        self._inum = m.nbytes // <Py_ssize_t>sizeof(uintptr_t)
+
+    # -- for the batch functions --
+
+    cdef bint _room(self, Py_ssize_t floats, Py_ssize_t ints) noexcept:
+        # Each array that gets values is in own memory with room for them.
+        return ((floats == 0 or (not self._fmem.borrowed and self._fmem.nbytes
+                                 >= (self._fnum + floats) * <Py_ssize_t>sizeof(double)))
+                and (ints == 0 or (not self._imem.borrowed and self._imem.nbytes
+                                   >= (self._inum + ints) * <Py_ssize_t>sizeof(uintptr_t))))
+
+    cdef int _make_room(self, Py_ssize_t floats, Py_ssize_t ints) except -1:
+        self._fmem = _grown(self._fmem, self._fnum * <Py_ssize_t>sizeof(double),
+                            (self._fnum + floats) * <Py_ssize_t>sizeof(double))
+        self._imem = _grown(self._imem, self._inum * <Py_ssize_t>sizeof(uintptr_t),
+                            (self._inum + ints) * <Py_ssize_t>sizeof(uintptr_t))
+        return 0
+
+
+cdef _Memory _grown(_Memory m, Py_ssize_t used, Py_ssize_t need):
+    # Own memory of at least `need` bytes that starts with the `used` bytes of
+    # m: m itself when it has room, grown in place when nothing views it.
+    # Nothing to append: m as it is.
+    if need <= used or (not m.borrowed and m.nbytes >= need):
+        return m
+    cdef Py_ssize_t size = m.nbytes + m.nbytes // 2
+    if size < need:
+        size = need
+    cdef char *data
+    if not m.borrowed and m.exports == 0:
+        data = <char *>realloc(m.data, size)
+        if data == NULL:
+            raise MemoryError()
+        memset(data + m.nbytes, 0, size - m.nbytes)
+        m.data = data
+        m.nbytes = size
+        return m
+    cdef _Memory fresh = _memory_own(size)
+    memcpy(fresh.data, m.data, used)
+    return fresh
+
+
+cdef Buffer _buffer_arg(object buffers):
+    if not isinstance(buffers, Buffer):
+        raise TypeError(f"buffers must be a tamias2d.batch.Buffer, not {type(buffers).__name__}")
+    return <Buffer>buffers
+
+
+cdef Py_ssize_t _count_each_body(const cpSpace *space) noexcept nogil:
+    # How many bodies cpSpaceEachBody visits (when nothing wakes meanwhile).
+    cdef Py_ssize_t n = space.dynamicBodies.num + space.staticBodies.num
+    cdef int i
+    cdef cpBody *body
+    for i in range(space.sleepingComponents.num):
+        body = <cpBody *>space.sleepingComponents.arr[i]
+        while body != NULL:
+            n += 1
+            body = body.sleeping.next
+    return n
+
+
+# -- get_space_bodies --
+
+cdef struct _BodyCursor:
+    const int *code
+    int ncodes
+    int width          # doubles per body
+    bint ids           # BODY_ID asked for
+    double *f          # next double (get) ...
+    double *fend
+    const double *src  # ... or next double to read (set)
+    const double *send
+    uintptr_t *i
+    uintptr_t *iend
+    bint overflow      # ran out of room: cannot happen, the room is counted first
+
+
+cdef void _get_body(cpBody *body, void *data) noexcept nogil:
+    cdef _BodyCursor *c = <_BodyCursor *>data
+    if c.f + c.width > c.fend or (c.ids and c.i >= c.iend):
+        c.overflow = True
+        return
+    if c.ids:
+        c.i[0] = <uintptr_t>body.userData
+        c.i += 1
+    c.f += _read_body(body, c.code, c.ncodes, c.f)
+
+
+def get_space_bodies(space, fields, buffers):
+    """Append the `fields` (a :class:`BodyFields`) of every body of `space`
+    to `buffers` (a :class:`Buffer`), as pymunk's function of that name does:
+    body after body in Munk2D's order (the dynamic and kinematic bodies, the
+    static bodies, ``space.static_body`` included once it was used, then the
+    sleeping bodies component by component), each body's fields in
+    :class:`BodyFields` order.
+
+    >>> import tamias2d
+    >>> from tamias2d.batch import Buffer, BodyFields, get_space_bodies
+    >>> space = tamias2d.Space()
+    >>> body = tamias2d.Body(1, 1)
+    >>> body.position = 3, 4
+    >>> body.angle = 0.5
+    >>> space.add(body)
+    >>> data = Buffer()
+    >>> get_space_bodies(space, BodyFields.POSITION | BodyFields.ANGLE, data)
+    >>> list(memoryview(data.float_buf()).cast("d"))
+    [3.0, 4.0, 0.5]
+    """
+    cdef Space sp = _space_arg(space)
+    cdef unsigned int bits = _flag_bits(fields, BodyFields)
+    cdef Buffer buf = _buffer_arg(buffers)
+    cdef int code[MAX_FIELDS]
+    cdef _BodyCursor c
+    c.ncodes = _body_flag_codes(bits, code)
+    c.code = code
+    c.width = 0
+    cdef int k
+    for k in range(c.ncodes):
+        c.width += <int>_FIELD_WIDTH[code[k]]
+    c.ids = (bits & 1) != 0
+    c.overflow = False
+    cdef Py_ssize_t n
+    while True:
+        tamias_wait_for_step(&sp._space)
+        n = _count_each_body(&sp._space)
+        if buf._room(n * c.width, n if c.ids else 0):
+            break
+        buf._make_room(n * c.width, n if c.ids else 0)   # Python may run: count again
+    c.f = <double *>buf._fmem.data + buf._fnum
+    c.fend = c.f + n * c.width
+    c.i = <uintptr_t *>buf._imem.data + buf._inum
+    c.iend = c.i + (n if c.ids else 0)
+    c.src = NULL
+    c.send = NULL
+    cpSpaceEachBody(&sp._space, _get_body, &c)
+    buf._fnum = c.f - <double *>buf._fmem.data
+    buf._inum = c.i - <uintptr_t *>buf._imem.data
+    if c.overflow:
+        raise RuntimeError("get_space_bodies: the space changed while it was read")
+
+
+# -- set_space_bodies --
+
+cdef void _set_body(cpBody *body, void *data) noexcept nogil:
+    cdef _BodyCursor *c = <_BodyCursor *>data
+    if c.src + c.width > c.send:
+        c.overflow = True
+        return
+    c.src += _write_body(body, c.code, c.ncodes, c.src)
+
+
+def set_space_bodies(space, fields, buffers):
+    """Set the `fields` (a :class:`BodyFields`) of the bodies of `space` from
+    the float array of `buffers`, read from its start in the layout
+    :func:`get_space_bodies` writes, as pymunk's function of that name does.
+
+    Each value goes through the C function of its Body setter (which wakes
+    the body), body after body in Munk2D's order. BODY_ID may be given but is
+    not set (ids cannot be changed) and the int array is not read. The array
+    must hold at least as many values as the space's bodies need, and those
+    must be finite (ValueError and IllegalBody; nothing is written then).
+
+    As in pymunk, writing to a sleeping body wakes its whole component in
+    the middle of Munk2D's walk over the sleeping components, which upsets
+    the walk: of such a component only the first two bodies are written,
+    the values meant for its other bodies go to the bodies visited next, and
+    about half of the sleeping components are passed over. To write every
+    body of a space with sleeping bodies, wake them (``body.activate()``),
+    then read with :func:`get_space_bodies` and write.
+
+    >>> import array, tamias2d
+    >>> from tamias2d.batch import Buffer, BodyFields, set_space_bodies
+    >>> space = tamias2d.Space()
+    >>> a, b = tamias2d.Body(1, 1), tamias2d.Body(1, 1)
+    >>> space.add(a, b)
+    >>> data = Buffer()
+    >>> data.set_float_buf(array.array("d", [1, 2, 0.5, 3, 4, -0.5]))
+    >>> set_space_bodies(space, BodyFields.POSITION | BodyFields.ANGLE, data)
+    >>> a.position, b.angle
+    (Vec2d(1.0, 2.0), -0.5)
+    """
+    cdef Space sp = _space_arg(space)
+    cdef unsigned int bits = _flag_bits(fields, BodyFields)
+    cdef Buffer buf = _buffer_arg(buffers)
+    cdef int code[MAX_FIELDS]
+    cdef _BodyCursor c
+    c.ncodes = _body_flag_codes(bits, code)
+    c.code = code
+    c.width = 0
+    cdef int k
+    for k in range(c.ncodes):
+        c.width += <int>_FIELD_WIDTH[code[k]]
+    c.ids = False
+    c.overflow = False
+    tamias_wait_for_step(&sp._space)
+    cdef Py_ssize_t n = _count_each_body(&sp._space)
+    cdef Py_ssize_t need = n * c.width
+    if need > buf._fnum:
+        raise ValueError(f"set_space_bodies: {n} bodies need {need} floats for "
+                         f"{fields!r}, the buffer holds {buf._fnum}")
+    cdef const double *src = <const double *>buf._fmem.data
+    cdef Py_ssize_t j
+    for j in range(need):
+        if not _finite(src[j]):
+            names = body_columns([_FIELD_NAMES[code[k]] for k in range(c.ncodes)])
+            raise IllegalBody(f"set_space_bodies: float {j} ({names[j % c.width]} of body "
+                              f"{j // c.width}) must be finite, got {src[j]!r}; "
+                              f"no body was changed")
+    c.src = src
+    c.send = src + need
+    c.f = NULL
+    c.fend = NULL
+    c.i = NULL
+    c.iend = NULL
+    cpSpaceEachBody(&sp._space, _set_body, &c)
+    if c.overflow:
+        raise RuntimeError("set_space_bodies: the space changed while it was written")
+
+
+# -- get_space_arbiters --
+
+cdef struct _ArbiterCursor:
+    unsigned int bits
+    int fwidth         # doubles per arbiter
+    int iwidth         # ints per arbiter
+    double *f
+    double *fend
+    uintptr_t *i
+    uintptr_t *iend
+    bint overflow
+
+
+cdef inline double *_put2(double *f, cpVect v) noexcept nogil:
+    f[0] = v.x
+    f[1] = v.y
+    return f + 2
+
+
+cdef void _get_arbiter(void *elt, void *data) noexcept nogil:
+    cdef cpArbiter *arb = <cpArbiter *>elt
+    cdef _ArbiterCursor *c = <_ArbiterCursor *>data
+    if c.f + c.fwidth > c.fend or c.i + c.iwidth > c.iend:
+        c.overflow = True
+        return
+    cdef unsigned int bits = c.bits
+    cdef cpBody *a
+    cdef cpBody *b
+    cdef int count = cpArbiterGetCount(arb)
+    cdef int n
+    if bits & 3:
+        cpArbiterGetBodies(arb, &a, &b)
+        if bits & 1:
+            c.i[0] = <uintptr_t>a.userData
+            c.i += 1
+        if bits & 2:
+            c.i[0] = <uintptr_t>b.userData
+            c.i += 1
+    if bits & 4:
+        c.f = _put2(c.f, cpArbiterTotalImpulse(arb))
+    if bits & 8:
+        c.f[0] = cpArbiterTotalKE(arb)
+        c.f += 1
+    if bits & 16:
+        c.i[0] = 1 if cpArbiterIsFirstContact(arb) else 0
+        c.i += 1
+    if bits & 32:
+        c.f = _put2(c.f, cpArbiterGetNormal(arb))
+    if bits & 64:
+        c.i[0] = <uintptr_t>count
+        c.i += 1
+    # Contact n (0 and 1) from bits 128 << 3n: point A, point B, distance;
+    # zeros when the arbiter has fewer contacts.
+    for n in range(2):
+        if bits & (128u << (3 * n)):
+            c.f = _put2(c.f, cpArbiterGetPointA(arb, n) if n < count else cpv(0.0, 0.0))
+        if bits & (256u << (3 * n)):
+            c.f = _put2(c.f, cpArbiterGetPointB(arb, n) if n < count else cpv(0.0, 0.0))
+        if bits & (512u << (3 * n)):
+            c.f[0] = cpArbiterGetDepth(arb, n) if n < count else 0.0
+            c.f += 1
+
+
+def get_space_arbiters(space, fields, buffers):
+    """Append the `fields` (an :class:`ArbiterFields`) of every arbiter the
+    space has cached to `buffers` (a :class:`Buffer`), as pymunk's function
+    of that name does: arbiter after arbiter in the order of Munk2D's
+    arbiter cache (a hash set keyed by shape addresses, so the order differs
+    between processes; it includes pairs that stopped touching within
+    ``space.collision_persistence`` steps, with CONTACT_COUNT 0, and the
+    pairs of sleeping bodies), each arbiter's fields in
+    :class:`ArbiterFields` order.
+
+    >>> import tamias2d
+    >>> from tamias2d.batch import Buffer, ArbiterFields, get_space_arbiters
+    >>> space = tamias2d.Space()
+    >>> space.add(tamias2d.Segment(space.static_body, (-10, 0), (10, 0), 1))
+    >>> ball = tamias2d.Body(1, 10)
+    >>> ball.position = 0, 1.9
+    >>> space.add(ball, tamias2d.Circle(ball, 1))
+    >>> space.step(0.01)
+    >>> data = Buffer()
+    >>> get_space_arbiters(space, ArbiterFields.CONTACT_COUNT | ArbiterFields.IS_FIRST_CONTACT, data)
+    >>> list(memoryview(data.int_buf()).cast("P"))
+    [1, 1]
+    """
+    cdef Space sp = _space_arg(space)
+    cdef unsigned int bits = _flag_bits(fields, ArbiterFields)
+    cdef Buffer buf = _buffer_arg(buffers)
+    cdef _ArbiterCursor c
+    c.bits = bits
+    c.overflow = False
+    c.iwidth = (bits & 1 != 0) + (bits & 2 != 0) + (bits & 16 != 0) + (bits & 64 != 0)
+    # Doubles of the flags from TOTAL_IMPULSE (4) on, bit after bit.
+    cdef int widths[11]
+    widths[:] = [2, 1, 0, 2, 0, 2, 2, 1, 2, 2, 1]
+    c.fwidth = 0
+    cdef int k
+    for k in range(11):
+        if bits & (4u << k):
+            c.fwidth += widths[k]
+    cdef Py_ssize_t m
+    while True:
+        tamias_wait_for_step(&sp._space)
+        m = sp._space.cachedArbiters.entries
+        if buf._room(m * c.fwidth, m * c.iwidth):
+            break
+        buf._make_room(m * c.fwidth, m * c.iwidth)   # Python may run: count again
+    c.f = <double *>buf._fmem.data + buf._fnum
+    c.fend = c.f + m * c.fwidth
+    c.i = <uintptr_t *>buf._imem.data + buf._inum
+    c.iend = c.i + m * c.iwidth
+    cpHashSetEach(sp._space.cachedArbiters, _get_arbiter, &c)
+    buf._fnum = c.f - <double *>buf._fmem.data
+    buf._inum = c.i - <uintptr_t *>buf._imem.data
+    if c.overflow:
+        raise RuntimeError("get_space_arbiters: the space changed while it was read")

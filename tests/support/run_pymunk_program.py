@@ -8,7 +8,8 @@ each ``pygame.display.flip``/``update`` is a frame, and after FRAMES frames
 the bodies of every live Space are printed as JSON (position, angle,
 velocity, angular velocity as repr strings, so equal output means equal
 bits) and the process exits. ``random`` is seeded, so the two engines get
-the same scene.
+the same scene. RUN_PYMUNK_KEYS (names of keys, e.g. ``"d u"``) presses those
+keys before the first frame.
 """
 import gc
 import json
@@ -54,6 +55,19 @@ try:
 
     pygame.display.flip = frame
     pygame.display.update = frame
+
+    # RUN_PYMUNK_KEYS="d u": the program's first pygame.event.get() also
+    # returns a KEYDOWN for each of these keys (to switch on a mode).
+    keys = os.environ.get("RUN_PYMUNK_KEYS", "").split()
+    if keys:
+        def get(*args, _get=pygame.event.get, **kwargs):
+            events = _get(*args, **kwargs)
+            while keys:
+                events.append(pygame.event.Event(pygame.KEYDOWN, key=pygame.key.key_code(keys.pop(0)),
+                                                 mod=0, unicode="", scancode=0))
+            return events
+
+        pygame.event.get = get
 except ImportError:
     pass
 
