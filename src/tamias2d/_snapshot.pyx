@@ -406,6 +406,33 @@ cdef inline bint _finv(cpVect v) noexcept nogil:
 cdef inline bint _finbb(cpBB bb) noexcept nogil:
     return _fin(bb.l) and _fin(bb.b) and _fin(bb.r) and _fin(bb.t) and bb.l <= bb.r and bb.b <= bb.t
 
+cdef inline bint _modest(double x) noexcept nogil:
+    # Finite, and small enough that its square is finite too: the joints
+    # square their offsets and lengths (a mass matrix, a spring's force).
+    return fabs(x) <= 1e150
+
+cdef inline bint _modestv(cpVect v) noexcept nogil:
+    return _modest(v.x) and _modest(v.y)
+
+cdef inline double _arm(cpVect r1, cpVect r2) noexcept nogil:
+    # The longest lever arm of two offsets (at least 1).
+    cdef double m = 1.0
+    m = fabs(r1.x) if fabs(r1.x) > m else m
+    m = fabs(r1.y) if fabs(r1.y) > m else m
+    m = fabs(r2.x) if fabs(r2.x) > m else m
+    m = fabs(r2.y) if fabs(r2.y) > m else m
+    return m
+
+cdef inline bint _impulse(double j, double arm) noexcept nogil:
+    # An accumulated impulse the warm start can apply: its moment about the
+    # lever arm stays finite (a static body's zero inverse inertia times an
+    # infinite moment is NaN).
+    return _fin(j) and fabs(j) * arm <= 1e300
+
+cdef inline bint _limits(double lo, double hi) noexcept nogil:
+    # A joint's range: an infinite end means no limit on that side.
+    return (lo == -INFINITY or _modest(lo)) and (hi == INFINITY or _modest(hi)) and lo <= hi
+
 cdef inline double _inverse(double x) noexcept nogil:
     # How the body setters store an inverse mass or moment.
     return INFINITY if x == 0.0 else 1.0 / x
@@ -1035,6 +1062,10 @@ cdef int _write_space(Writer *w, Capture *cap, Space sp, list table, int32_t nvi
     w_put(w, &s, sizeof(SpaceRec))
     return 0
 
+cdef enum:
+    MAX_ITERATIONS = 100000
+    MAX_HASH_TABLE = 1 << 25     # spatial hash buckets (256 MiB, all cleared at every step)
+
 cdef int _read_space(Reader *r, Parsed *p) except -1:
     cdef SpaceRec *s = &p.s
     cdef uint64_t pairs
@@ -1054,8 +1085,10 @@ cdef int _read_space(Reader *r, Parsed *p) except -1:
     if s.nstep_constraints > s.nconstraints:
         _bad("the solver's constraint array holds more entries than there are constraints")
     # The settings as the setters (and the step) need them.
-    if s.iterations < 1:
-        _bad(f"iterations is {s.iterations} (the solver needs at least 1)")
+    # The setter takes up to 2**31 - 1; a step then takes minutes. Refused
+    # beyond what any scene uses, so that a flipped bit cannot hang the copy.
+    if s.iterations < 1 or s.iterations > MAX_ITERATIONS:
+        _bad(f"iterations is {s.iterations} (1 to {MAX_ITERATIONS})")
     if not (_fin(s.gx) and _fin(s.gy)):
         _bad(f"gravity ({s.gx}, {s.gy}) is not finite")
     if not (_fin(s.damping) and s.damping >= 0.0):
@@ -1642,24 +1675,13 @@ _JOINT_NAMES = ("pin joint", "slide joint", "pivot joint", "groove joint", "damp
                 "damped rotary spring", "rotary limit joint", "ratchet joint", "gear joint",
                 "simple motor")
 
-cdef inline bint _modest(double x) noexcept nogil:
-    # Finite, and small enough that its square is finite too: the joints
-    # square their offsets and lengths (a mass matrix, a spring's force).
-    return fabs(x) <= 1e150
-
-cdef inline bint _modestv(cpVect v) noexcept nogil:
-    return _modest(v.x) and _modest(v.y)
-
-cdef inline bint _limits(double lo, double hi) noexcept nogil:
-    # A joint's range: an infinite end means no limit on that side.
-    return (lo == -INFINITY or _modest(lo)) and (hi == INFINITY or _modest(hi)) and lo <= hi
-
 # The numbers of one joint. Parameters: what a step can solve without a
 # NaN (the values the issue of finite-but-hopeless parameters lists: a
 # groove of no length, a range from inf to inf, a rest length of 1e308, a
 # gear ratio whose inverse overflows, a motor rate of 1e308, all refused).
-# Accumulated impulses warm-start the next step: finite. The other cached
-# values are recomputed by the joint's pre-step before they are used.
+# Accumulated impulses warm-start the next step: finite, with moments that
+# stay finite. The other cached values are recomputed by the joint's
+# pre-step before they are used.
 cdef int _check_joint(int32_t k, int kind, const char *data) except -1:
     cdef const cpConstraint *c = <const cpConstraint *>data
     cdef const cpPinJoint *pin
@@ -1681,18 +1703,23 @@ cdef int _check_joint(int32_t k, int kind, const char *data) except -1:
     if kind == 0:
         pin = <const cpPinJoint *>data
         ok = (_modestv(pin.anchorA) and _modestv(pin.anchorB) and _modest(pin.dist)
-              and _fin(pin.jnAcc))
+              and _impulse(pin.jnAcc, _arm(pin.anchorA, pin.anchorB)))
     elif kind == 1:
         slide = <const cpSlideJoint *>data
         ok = (_modestv(slide.anchorA) and _modestv(slide.anchorB)
-              and _limits(slide.min, slide.max) and _fin(slide.jnAcc))
+              and _limits(slide.min, slide.max)
+              and _impulse(slide.jnAcc, _arm(slide.anchorA, slide.anchorB)))
     elif kind == 2:
         pivot = <const cpPivotJoint *>data
-        ok = _modestv(pivot.anchorA) and _modestv(pivot.anchorB) and _finv(pivot.jAcc)
+        ok = (_modestv(pivot.anchorA) and _modestv(pivot.anchorB)
+              and _impulse(pivot.jAcc.x, _arm(pivot.anchorA, pivot.anchorB))
+              and _impulse(pivot.jAcc.y, _arm(pivot.anchorA, pivot.anchorB)))
     elif kind == 3:
         groove = <const cpGrooveJoint *>data
         ok = (_modestv(groove.grv_a) and _modestv(groove.grv_b) and _modestv(groove.anchorB)
-              and _finv(groove.grv_tn) and _finv(groove.jAcc))
+              and _finv(groove.grv_tn)
+              and _impulse(groove.jAcc.x, _arm(groove.grv_a, groove.anchorB))
+              and _impulse(groove.jAcc.y, _arm(groove.grv_b, groove.anchorB)))
         if ok:
             if groove.grv_a.x == groove.grv_b.x and groove.grv_a.y == groove.grv_b.y:
                 _bad(f"constraint {k} (groove joint) has a groove of no length")
@@ -1706,32 +1733,32 @@ cdef int _check_joint(int32_t k, int kind, const char *data) except -1:
         spring = <const cpDampedSpring *>data
         ok = (_modestv(spring.anchorA) and _modestv(spring.anchorB)
               and _modest(spring.restLength) and _modest(spring.stiffness)
-              and _modest(spring.damping) and _fin(spring.jAcc))
+              and _modest(spring.damping) and _impulse(spring.jAcc, _arm(spring.anchorA, spring.anchorB)))
     elif kind == 5:
         rspring = <const cpDampedRotarySpring *>data
         ok = (_modest(rspring.restAngle) and _modest(rspring.stiffness)
-              and _modest(rspring.damping) and _fin(rspring.jAcc))
+              and _modest(rspring.damping) and _impulse(rspring.jAcc, 1.0))
     elif kind == 6:
         limit = <const cpRotaryLimitJoint *>data
-        ok = _limits(limit.min, limit.max) and _fin(limit.jAcc)
+        ok = _limits(limit.min, limit.max) and _impulse(limit.jAcc, 1.0)
     elif kind == 7:
         ratchet = <const cpRatchetJoint *>data
         ok = (_modest(ratchet.angle) and _modest(ratchet.phase) and _modest(ratchet.ratchet)
-              and _fin(ratchet.jAcc))
+              and _impulse(ratchet.jAcc, 1.0))
     elif kind == 8:
         gear = <const cpGearJoint *>data
         # The setter keeps 1 / ratio beside the ratio; the pre-step uses both
         # (a ratio of 0 is the step's to refuse, as for a gear made so).
         ok = (_modest(gear.phase) and _modest(gear.ratio)
               and gear.ratio_inv == _inverse(gear.ratio)
-              and (gear.ratio == 0.0 or _modest(gear.ratio_inv)) and _fin(gear.jAcc))
+              and (gear.ratio == 0.0 or _modest(gear.ratio_inv)) and _impulse(gear.jAcc, 1.0))
     else:
         motor = <const cpSimpleMotor *>data
-        ok = _modest(motor.rate) and _fin(motor.jAcc)
+        ok = _modest(motor.rate) and _impulse(motor.jAcc, 1.0)
     if not ok:
         _bad(f"constraint {k} ({_JOINT_NAMES[kind]}) has a parameter the step cannot solve "
-             f"(not finite, beyond 1e150, or an empty range) or an accumulated impulse that is "
-             f"not finite")
+             f"(not finite, beyond 1e150, or an empty range) or an accumulated impulse whose "
+             f"moment would overflow")
     return 0
 
 # Every constraint is in the constraint lists of both its bodies, once
@@ -2188,11 +2215,17 @@ cdef int _read_arbiters(Reader *r, Parsed *p) except -1:
         p.contacts_at[k] = <const cpContact *>contacts
         for i in range(p.arbs[k].count):
             con = <const cpContact *>contacts + i
-            # The solver's inputs; the warm start reuses the impulses.
-            if not (_finv(con.r1) and _finv(con.r2) and _fin(con.nMass) and _fin(con.tMass)
-                    and _fin(con.bounce) and _fin(con.jnAcc) and _fin(con.jtAcc)
-                    and _fin(con.jBias) and _fin(con.bias)):
-                _bad(f"contact {i} of arbiter {k} has a number that is not finite")
+            # The solver's inputs. The warm start applies the impulses at the
+            # offsets, to static bodies too (whose zero inverse mass times an
+            # overflowed product is NaN): offsets and impulses whose products
+            # stay finite.
+            if not (_modestv(con.r1) and _modestv(con.r2) and _fin(con.nMass)
+                    and _fin(con.tMass) and _fin(con.bounce) and _fin(con.jBias)
+                    and _fin(con.bias)
+                    and _impulse(con.jnAcc, _arm(con.r1, con.r2))
+                    and _impulse(con.jtAcc, _arm(con.r1, con.r2))):
+                _bad(f"contact {i} of arbiter {k} has a number that is not finite, an offset "
+                     f"beyond 1e150 or an impulse whose moment would overflow")
         contacts += p.arbs[k].count * sizeof(cpContact)
     p.step_arbs = <const int32_t *>r_take(r, p.s.nstep_arbiters, sizeof(int32_t),
                                           "step arbiter array")
@@ -2288,9 +2321,9 @@ cdef int _cmp_pair(const void *a, const void *b) noexcept nogil:
 # * a threaded arbiter of awake bodies is in this step's array (the next
 #   step unthreads only those; another would be threaded twice and the
 #   flood fill would never end);
-# * this step's array holds threaded arbiters of awake bodies, in the cache
-#   (removing a shape finds its arbiters there; with a persistence of 0
-#   the cache lets them go at once);
+# * this step's array holds threaded arbiters of awake bodies (usually in
+#   the cache too, but a step run with a persistence of 0 lets them go from
+#   it at once);
 # * only a sleeping arbiter keeps its contacts on the heap;
 # * the cache holds each pair of shapes once (a second one would not be inserted).
 cdef int _check_arbiter_links(Parsed *p) except -1:
@@ -2328,8 +2361,6 @@ cdef int _check_arbiter_links(Parsed *p) except -1:
         if not (f & ARB_A and f & ARB_B):
             _bad(f"this step's arbiter array names arbiter {k}, which is not in its bodies' "
                  f"arbiter lists")
-        if not (f & ARB_CACHE) and p.s.collisionPersistence != 0:
-            _bad(f"this step's arbiter {k} is not in the arbiter cache")
     for k in range(p.s.narbiters):
         a = &p.arbs[k]
         f = p.arb_flags[k]
@@ -2543,8 +2574,10 @@ cdef int _read_indexes(Reader *r, Parsed *p) except -1:
             # use_spatial_hash(celldim, numcells) makes them again.
             if not (_fin(x.celldim) and x.celldim > 0.0):
                 _bad(f"{name} has cell size {x.celldim}")
-            if x.numcells < 1 or next_prime(x.numcells) != x.numcells:
-                _bad(f"{name} has {x.numcells} cells, not a size a spatial hash can have")
+            if x.numcells < 1 or next_prime(x.numcells) != x.numcells \
+                    or x.numcells > MAX_HASH_TABLE:
+                _bad(f"{name} has {x.numcells} cells, not a size a spatial hash can have "
+                     f"(a table prime up to {MAX_HASH_TABLE})")
             if x.ncells > x.numcells:
                 _bad(f"{name} has more non-empty cells than cells")
     if p.index[0].kind == 2 and (p.index[0].celldim != p.index[1].celldim
