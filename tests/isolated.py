@@ -41,8 +41,9 @@ def _signal_name(num):
 
 def run_in_child(fn, args=(), kwargs=None, timeout=120.0):
     """Call fn(*args, **kwargs) in a forked child. Returns
-    ("ok", None), ("error", (type name, message, traceback text)),
-    ("skip", reason), ("signal", name) or ("timeout", seconds)."""
+    ("ok", fn's return value, which must pickle), ("error", (type name,
+    message, traceback text)), ("skip", reason), ("signal", name) or
+    ("timeout", seconds)."""
     kwargs = kwargs or {}
     sys.stdout.flush()
     sys.stderr.flush()
@@ -53,8 +54,7 @@ def run_in_child(fn, args=(), kwargs=None, timeout=120.0):
         status = 0
         try:
             try:
-                fn(*args, **kwargs)
-                payload = ("ok", None)
+                payload = ("ok", fn(*args, **kwargs))
             except pytest.skip.Exception as exc:
                 payload = ("skip", str(exc))
             except BaseException as exc:
