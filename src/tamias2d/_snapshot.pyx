@@ -3717,7 +3717,7 @@ def snapshot_sections(bytes blob not None):
     >>> from tamias2d._snapshot import space_getstate, snapshot_sections
     >>> blob = dict(space_getstate(tamias2d.Space())["special"])["tamias2d_snapshot"][1]
     >>> [name for name, offset, size, count in snapshot_sections(blob)][:3]
-    ['header', 'space', 'body links']
+    ['header', 'space', 'soft solver settings']
     """
     cdef Parsed p
     cdef list log = []
