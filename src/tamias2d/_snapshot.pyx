@@ -1104,8 +1104,8 @@ cdef int _read_space(Reader *r, Parsed *p) except -1:
     # beyond what any scene uses, so that a flipped bit cannot hang the copy.
     if s.iterations < 1 or s.iterations > MAX_ITERATIONS:
         _bad(f"iterations is {s.iterations} (1 to {MAX_ITERATIONS})")
-    if not (_fin(s.gx) and _fin(s.gy)):
-        _bad(f"gravity ({s.gx}, {s.gy}) is not finite")
+    if not (_modest(s.gx) and _modest(s.gy)):
+        _bad(f"gravity ({s.gx}, {s.gy}) is not finite or beyond 1e150")
     if not (_fin(s.damping) and s.damping >= 0.0):
         _bad(f"damping {s.damping} is not a finite number >= 0")
     if s.idleSpeedThreshold != s.idleSpeedThreshold:
@@ -1386,10 +1386,16 @@ cdef int _check_body_struct(int32_t k, const cpBody *b) except -1:
     elif not (_fin(b.sleeping.idleTime) and b.sleeping.idleTime >= 0.0):
         _bad(f"body {k} has idle time {b.sleeping.idleTime} (a finite number >= 0, or "
              f"infinite for a static body)")
-    if not (_finv(b.p) and _finv(b.v) and _finv(b.f) and _finv(b.cog) and _fin(b.a)
-            and _fin(b.w) and _fin(b.t) and _finv(b.v_bias) and _fin(b.w_bias)):
-        _bad(f"body {k} has a position, velocity, force, angle, angular velocity, torque, "
-             f"centre of gravity or bias velocity that is not finite")
+    if not (_finv(b.p) and _finv(b.v) and _finv(b.f) and _fin(b.a) and _fin(b.w)
+            and _fin(b.t) and _finv(b.v_bias) and _fin(b.w_bias)):
+        _bad(f"body {k} has a position, velocity, force, angle, angular velocity, torque or "
+             f"bias velocity that is not finite")
+    # The centre of gravity is a lever arm (the shapes hang from it), held
+    # to what its square can take, as joint anchors and shape offsets are.
+    # (Velocities may be huge: a moment of 1e-300 is valid and spins fast.)
+    if not _modestv(b.cog):
+        _bad(f"body {k}'s centre of gravity ({b.cog.x}, {b.cog.y}) is not finite or beyond "
+             f"1e150")
     # The transform is always a rotation plus a translation (the angle's
     # cosine and sine); the shapes' world geometry is made from it.
     if not (_fin(b.transform.a) and _fin(b.transform.b) and _fin(b.transform.tx)
@@ -1509,9 +1515,12 @@ cdef int _check_shape_base(int32_t k, const cpShape *s, uint64_t counter) except
              f"({counter})")
     return 0
 
+# Local geometry (offsets from the body, radii) becomes the contacts' lever
+# arms: finite with finite squares, as for joint anchors.
 cdef int _check_circle(int32_t k, const cpCircleShape *c) except -1:
-    if not (_finv(c.c) and _finv(c.tc) and _fin(c.r) and c.r >= 0.0):
-        _bad(f"circle {k} has a centre or radius ({c.r}) that is not finite (or a negative radius)")
+    if not (_modestv(c.c) and _finv(c.tc) and _modest(c.r) and c.r >= 0.0):
+        _bad(f"circle {k} has a centre or radius ({c.r}) that is not finite or beyond 1e150 "
+             f"(or a negative radius)")
     return 0
 
 cdef inline cpVect _edge_normal(cpVect a, cpVect b) noexcept nogil:
@@ -1528,11 +1537,11 @@ cdef inline bint _near(cpVect u, cpVect v) noexcept nogil:
 
 cdef int _check_segment(int32_t k, const cpSegmentShape *s) except -1:
     cdef cpVect n = _edge_normal(s.a, s.b), m
-    if not (_finv(s.a) and _finv(s.b) and _finv(s.n) and _finv(s.ta) and _finv(s.tb)
+    if not (_modestv(s.a) and _modestv(s.b) and _finv(s.n) and _finv(s.ta) and _finv(s.tb)
             and _finv(s.tn) and _finv(s.a_tangent) and _finv(s.b_tangent)
-            and _fin(s.r) and s.r >= 0.0):
-        _bad(f"segment {k} has an end point, normal or radius ({s.r}) that is not finite "
-             f"(or a negative radius)")
+            and _modest(s.r) and s.r >= 0.0):
+        _bad(f"segment {k} has an end point, normal or radius ({s.r}) that is not finite or "
+             f"beyond 1e150 (or a negative radius)")
     # The collision code takes the normal as given: it must be the end
     # points' (either sign: the constructor and the setter differ).
     m.x = -n.x
@@ -1543,11 +1552,13 @@ cdef int _check_segment(int32_t k, const cpSegmentShape *s) except -1:
 
 cdef int _check_poly(int32_t k, const cpPolyShape *poly, const cpSplittingPlane *planes) except -1:
     cdef int i
-    if not (_fin(poly.r) and poly.r >= 0.0):
+    if not (_modest(poly.r) and poly.r >= 0.0):
         _bad(f"polygon {k} has radius {poly.r}")
     for i in range(2 * poly.count):
-        if not (_finv(planes[i].v0) and _finv(planes[i].n)):
-            _bad(f"polygon {k} has a vertex or edge normal that is not finite")
+        if not (_finv(planes[i].v0) and _finv(planes[i].n)
+                and (i < poly.count or _modestv(planes[i].v0))):
+            _bad(f"polygon {k} has a vertex or edge normal that is not finite (or a vertex "
+                 f"beyond 1e150)")
     # The local planes: each edge's normal is its end points' (the world
     # planes are made from these at every step).
     for i in range(poly.count):
@@ -1555,6 +1566,36 @@ cdef int _check_poly(int32_t k, const cpPolyShape *poly, const cpSplittingPlane 
                      _edge_normal(planes[poly.count + (i + poly.count - 1) % poly.count].v0,
                                   planes[poly.count + i].v0)):
             _bad(f"polygon {k}'s edge normal {i} does not match its vertices")
+    return 0
+
+cdef inline bint _near_body(cpVect v, const cpBody *b) noexcept nogil:
+    return fabs(v.x - b.p.x) <= 1e150 and fabs(v.y - b.p.y) <= 1e150
+
+# The world geometry a static or sleeping shape keeps (what the narrow phase
+# reads until it is reindexed) lies within lever-arm reach of its body.
+cdef int _check_shape_geometry(Parsed *p) except -1:
+    cdef int32_t k, i
+    cdef const cpBody *b
+    cdef const cpPolyShape *poly
+    cdef const cpSplittingPlane *planes
+    cdef bint ok
+    for k in range(p.s.nshapes):
+        b = &p.body_structs[p.shape_body[k]]
+        if p.shape_kinds[k] == 0:
+            ok = _near_body((<const cpCircleShape *>p.shape_at[k]).tc, b)
+        elif p.shape_kinds[k] == 1:
+            ok = (_near_body((<const cpSegmentShape *>p.shape_at[k]).ta, b)
+                  and _near_body((<const cpSegmentShape *>p.shape_at[k]).tb, b))
+        else:
+            poly = <const cpPolyShape *>p.shape_at[k]
+            planes = (<const cpSplittingPlane *>(p.shape_at[k] + sizeof(cpPolyShape))
+                      if poly.count > CP_POLY_SHAPE_INLINE_ALLOC
+                      else <const cpSplittingPlane *>poly._planes)
+            ok = True
+            for i in range(poly.count):
+                ok = ok and _near_body(planes[i].v0, b)
+        if not ok:
+            _bad(f"shape {k}'s world geometry is more than 1e150 away from its body")
     return 0
 
 # Overwrite a shape's struct with the exact bytes at data (its body, class
@@ -3414,6 +3455,7 @@ cdef int _check_links(Parsed *p) except -1:
     cdef int j
     _check_components(p)
     _check_shape_lists(p)
+    _check_shape_geometry(p)
     _check_constraint_links(p)
     _check_arbiter_links(p)
     for j in range(2):
