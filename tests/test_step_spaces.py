@@ -14,6 +14,7 @@ import tamias2d
 from tamias2d.errors import IllegalBody, SpaceLocked
 
 import scenes
+from isolated import isolated
 
 
 def state(space):
@@ -143,3 +144,31 @@ def test_a_space_inside_its_own_step_is_refused():
     s.on_collision(pre_solve=pre_solve)
     s.step(0.1)
     assert seen and "spaces[0]" in seen[0]
+
+
+@isolated(timeout=60)   # a regression here is a deadlock, not a failure
+def test_callbacks_may_change_their_own_space_on_any_thread():
+    # A callback runs on the worker thread that steps its space; it may
+    # change that space's bodies (the thread guard lets the stepping thread
+    # through) and the result equals stepping alone.
+    calls = []
+
+    def push(arbiter, space, data):
+        calls.append(1)
+        for shape in arbiter.shapes:
+            if shape.body.body_type == tamias2d.Body.DYNAMIC:
+                shape.body.angular_velocity = 0.25
+
+    def make():
+        s = scenes.circles_on_segment(tamias2d, count=6)
+        s.on_collision(pre_solve=push)
+        return s
+
+    together = [make() for _ in range(6)]
+    alone = [make() for _ in range(6)]
+    tamias2d.step_spaces(together, 1 / 60, threads=3, steps=60)
+    for s in alone:
+        for _ in range(60):
+            s.step(1 / 60)
+    assert all(state(a) == state(b) for a, b in zip(together, alone))
+    assert calls   # the callbacks ran (and changed bodies) on the workers

@@ -26,6 +26,10 @@ import threading
 
 from tamias2d.errors import SpaceLocked
 
+cdef extern from "pythread.h":
+    # Safe without the GIL (Cython's declaration lacks nogil).
+    unsigned long tamias_thread_ident "PyThread_get_thread_ident"() nogil
+
 cdef extern from *:
     """
     #if defined(_MSC_VER)
@@ -65,6 +69,10 @@ cdef void _work(Job *job) noexcept nogil:
         i = tamias_take_next(&job.next)
         if i >= job.count:
             return
+        # The space is this thread's now: its callbacks (which run here)
+        # pass the thread guard, other threads still wait (stepThread stays
+        # non-zero; a word written whole, read under the GIL by waiters).
+        job.spaces[i].stepThread = tamias_thread_ident()
         job.bad[i] = tamias_space_step(job.spaces[i], job.dt)
 
 
