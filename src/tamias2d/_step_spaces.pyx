@@ -61,6 +61,7 @@ cdef int _started = 0                          # workers running
 cdef PyThread_type_lock _go[MAX_WORKERS]       # released to start worker k
 cdef PyThread_type_lock _done[MAX_WORKERS]     # released by worker k when it ends
 cdef object _pool_lock = threading.Lock()      # one step_spaces call at a time
+cdef long _pool_pid = -1                       # the process whose workers these are
 
 
 cdef void _work(Job *job) noexcept nogil:
@@ -85,7 +86,12 @@ def _worker_main(int k):
 
 
 cdef int _ensure_workers(int n) except -1:
-    global _started
+    global _started, _pool_pid
+    if _pool_pid != os.getpid():
+        # A fork keeps the counters but not the threads: start afresh (the
+        # parent's locks are left as they are).
+        _started = 0
+        _pool_pid = os.getpid()
     while _started < n:
         k = _started
         _go[k] = PyThread_allocate_lock()
