@@ -1035,6 +1035,19 @@ cdef struct _BodyCursor:
     bint overflow      # ran out of room: cannot happen, the room is counted first
 
 
+# The field codes of `bits` (written to `code`) and the doubles per body;
+# `ids` says whether body ids go to the int buffer.
+cdef void _body_cursor_init(_BodyCursor *c, unsigned int bits, int *code, bint ids) noexcept:
+    cdef int k
+    c.ncodes = _body_flag_codes(bits, code)
+    c.code = code
+    c.width = 0
+    for k in range(c.ncodes):
+        c.width += <int>_FIELD_WIDTH[code[k]]
+    c.ids = ids
+    c.overflow = False
+
+
 cdef void _get_body(cpBody *body, void *data) noexcept nogil:
     cdef _BodyCursor *c = <_BodyCursor *>data
     if c.f + c.width > c.fend or (c.ids and c.i >= c.iend):
@@ -1071,14 +1084,7 @@ def get_space_bodies(space, fields, buffers):
     cdef Buffer buf = _buffer_arg(buffers)
     cdef int code[MAX_FIELDS]
     cdef _BodyCursor c
-    c.ncodes = _body_flag_codes(bits, code)
-    c.code = code
-    c.width = 0
-    cdef int k
-    for k in range(c.ncodes):
-        c.width += <int>_FIELD_WIDTH[code[k]]
-    c.ids = (bits & 1) != 0
-    c.overflow = False
+    _body_cursor_init(&c, bits, code, (bits & 1) != 0)
     cdef Py_ssize_t n
     while True:
         tamias_wait_for_step(&sp._space)
@@ -1144,14 +1150,7 @@ def set_space_bodies(space, fields, buffers):
     cdef Buffer buf = _buffer_arg(buffers)
     cdef int code[MAX_FIELDS]
     cdef _BodyCursor c
-    c.ncodes = _body_flag_codes(bits, code)
-    c.code = code
-    c.width = 0
-    cdef int k
-    for k in range(c.ncodes):
-        c.width += <int>_FIELD_WIDTH[code[k]]
-    c.ids = False
-    c.overflow = False
+    _body_cursor_init(&c, bits, code, False)
     tamias_wait_for_step(&sp._space)
     cdef Py_ssize_t n = _count_each_body(&sp._space)
     cdef Py_ssize_t need = n * c.width
