@@ -74,7 +74,7 @@ from tamias2d.shape import PointQueryInfo, SegmentQueryInfo, ShapeQueryInfo
 from tamias2d.errors import (IllegalBody, IllegalShape, SpaceLocked, AlreadyInSpace,
     NotInSpace, IllegalCollisionType)
 
-from tamias2d._threadguard cimport (tamias_wait_for_step, tamias_wait_body, tamias_begin_step,
+from tamias2d._threadguard cimport (tamias_wait_for_step, tamias_begin_step,
     tamias_end_step, tamias_step_lock_new, tamias_step_lock_free)
 from tamias2d._private cimport (cpConstraintNext, cpSpaceArrayForBodyType,
     cpCallHandlers, PHASE_SEPARATE)
