@@ -32,6 +32,19 @@ cdef const cpFloat SOFT_DEFAULT_CONTACT_DAMPING_RATIO = 10.0
 cdef const cpFloat SOFT_PUSH_OUT_PER_SLOP = 600.0
 # Speculative distance = this x collision_slop (Box2D: 4 linear slops).
 cdef const cpFloat SOFT_SPECULATIVE_PER_SLOP = 4.0
+# Relax passes (rigid, no bias) per substep. Box2D runs one; a second one
+# takes out the push-out velocity that one Gauss-Seidel pass leaves in big
+# pyramids and under heavy bodies, where it shows as jitter.
+cdef enum:
+    SOFT_RELAX_ITERATIONS = 2
+# A loaded contact point is stiffened so that its load sinks it at most this
+# fraction of the smaller of the two bodies' sizes (SoftPointSoftness) ...
+cdef const cpFloat SOFT_MAX_LOAD_DEFLECTION = 0.005
+# ... but at most this many times (stiffer, Gauss-Seidel no longer converges
+# where a light body carries a heavy one, and the pair starts to bounce) ...
+cdef const cpFloat SOFT_MAX_STIFFENING = 5.0
+# ... and the load it is stiffened for falls by at most this factor per step.
+cdef const cpFloat SOFT_LOAD_DECAY = 0.98
 
 # Flags of a SoftBody.
 cdef enum:
@@ -61,6 +74,8 @@ cdef struct SoftPoint:
     cpFloat totalNormal, totalTangent         # over the step (-> jnAcc, jtAcc)
     cpFloat maxNormalImpulse
     cpFloat relativeVelocity                  # normal speed at the step's start
+    cpFloat biasRate, massScale, impulseScale # softness (SoftSoftness) of this point
+    cpFloat compliance                        # impulseScale / massScale (block solver)
 
 # One arbiter's contact constraint, prepared once per step.
 cdef struct SoftContact:
@@ -69,7 +84,8 @@ cdef struct SoftContact:
     cpFloat nx, ny
     cpFloat friction, restitution
     cpFloat surfaceT          # surface velocity along the tangent
-    cpFloat biasRate, massScale, impulseScale
+    cpFloat k11, k12, k22     # normal effective-mass matrix of a two-point manifold
+    bint block                # solve the two normal rows together (well conditioned)
     SoftPoint p[2]
     cpArbiter *arb
 
@@ -79,7 +95,7 @@ cdef struct SoftSoftness:
     cpFloat massScale
     cpFloat impulseScale
 
-cdef SoftSoftness SoftMakeSoft(cpFloat hertz, cpFloat zeta, cpFloat h) noexcept nogil
+cdef SoftSoftness SoftMakeSoftOmega(cpFloat omega, cpFloat zeta, cpFloat h) noexcept nogil
 
 cdef void SoftSettingsInit(cpSoftSettings *settings) noexcept nogil
 cdef void SoftScratchFree(cpSoftScratch *scratch) noexcept nogil

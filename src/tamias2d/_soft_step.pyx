@@ -11,8 +11,17 @@ bodies' relative motion (anchors relative to the centres, Box2D's adjusted
 separation), without running the narrow phase again.
 
 Scene meaning is Chipmunk's: friction and elasticity multiply, surface
-velocity, collision_slop is the overlap left alone, handlers and sleeping are
-the shared stages of ``_space_step``.
+velocity, handlers and sleeping are the shared stages of ``_space_step``.
+collision_slop is the scene's unit of length here (speculative distance and
+push-out speed follow it); overlap is pushed out softly down to the depth at
+which a contact carries its load, as in Box2D, not left alone up to the slop.
+
+Beyond Box2D's soft step (docs/stability.md measures each):
+  * a two-point manifold's normal rows are solved together (SoftSolveBlock),
+    so tall stacks do not buckle from the order the corners are solved in;
+  * a loaded point is stiffened for its load (SoftPointSoftness), so the
+    bottom of a tall stack or pyramid sinks no deeper than the top;
+  * two relax passes per substep (SOFT_RELAX_ITERATIONS).
 
 Layout: bodies are gathered into one contiguous SoftBody array (slot 0 is the
 immovable body), contacts into one contiguous SoftContact array, once per
@@ -20,9 +29,9 @@ step; the substep loops touch only those arrays (and the joints' structs), no
 allocation, no Python except user integrators and joints' callbacks. Graph
 colouring and SIMD lanes can partition these arrays later.
 """
-from libc.math cimport INFINITY, pow, sqrt, cos, sin, fabs
+from libc.math cimport INFINITY, pow, sqrt, cos, sin, fabs, fmin
 from tamias2d._config cimport cpFloat, cpBool
-from tamias2d._structs cimport (cpSpace, cpBody, cpArbiter, cpContact, cpArray, cpConstraint,
+from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, cpArray, cpConstraint,
     cpSoftSettings, cpSoftScratch, TAMIAS_SOLVER_CHIPMUNK, TAMIAS_SOLVER_SOFT,
     CP_BODY_TYPE_KINEMATIC, CP_ARBITER_STATE_FIRST_COLLISION)
 from tamias2d._containers cimport cprealloc, cpfree
@@ -64,18 +73,18 @@ cdef cpFloat SoftSpeculative(const cpSpace *space) noexcept nogil:
         return space.soft.speculative
     return SOFT_SPECULATIVE_PER_SLOP * space.collisionSlop
 
-cdef SoftSoftness SoftMakeSoft(cpFloat hertz, cpFloat zeta, cpFloat h) noexcept nogil:
+cdef SoftSoftness SoftMakeSoftOmega(cpFloat omega, cpFloat zeta, cpFloat h) noexcept nogil:
     # The implicit (backward Euler) mass-spring-damper as a velocity
     # constraint: biasRate turns a separation into a target speed, massScale
     # and impulseScale soften the effective mass and the accumulated impulse.
+    # omega is the angular frequency (2 pi hertz).
     cdef SoftSoftness s
-    cdef cpFloat omega, a1, a2, a3
-    if hertz == 0.0:
+    cdef cpFloat a1, a2, a3
+    if omega == 0.0:
         s.biasRate = 0.0
         s.massScale = 1.0
         s.impulseScale = 0.0
         return s
-    omega = 2.0 * 3.14159265358979323846 * hertz
     a1 = 2.0 * zeta + h * omega
     a2 = h * omega * a1
     a3 = 1.0 / (1.0 + a2)
@@ -83,6 +92,9 @@ cdef SoftSoftness SoftMakeSoft(cpFloat hertz, cpFloat zeta, cpFloat h) noexcept 
     s.massScale = a2 * a3
     s.impulseScale = a3
     return s
+
+cdef inline cpFloat SoftOmega(cpFloat hertz) noexcept nogil:
+    return 2.0 * 3.14159265358979323846 * hertz
 
 
 # -- scratch memory (grown, never shrunk) ---------------------------------------------
@@ -118,9 +130,10 @@ cdef struct SoftContext:
     cpFloat gx, gy
     cpFloat damping           # per substep
     cpFloat pushOut
-    cpFloat slop
     SoftSoftness contactSoft  # between two movable bodies
     SoftSoftness staticSoft   # against an immovable one (twice as stiff)
+    cpFloat contactOmega, staticOmega, dampingRatio
+    cpFloat maxDeflection     # a loaded point is stiffened to settle at most this deep
 
 cdef inline int SoftIndex(cpBody *body, SoftBody *bodies, int count) noexcept nogil:
     # The slot of an awake body, or 0 (static, sleeping, removed).
@@ -278,6 +291,51 @@ cdef void SoftFinishJoints(SoftContext *ctx) noexcept nogil:
 
 # -- contacts ------------------------------------------------------------------------------
 
+cdef inline cpFloat SoftShapeSize(cpShape *shape) noexcept nogil:
+    # The smaller side of the bounding box of a movable body's shape; 0 for
+    # an immovable one (a ground segment's thickness says nothing).
+    if shape.body.m_inv == 0.0 and shape.body.i_inv == 0.0:
+        return 0.0
+    return fmin(shape.bb.r - shape.bb.l, shape.bb.t - shape.bb.b)
+
+cdef inline cpFloat SoftContactSize(cpArbiter *arb) noexcept nogil:
+    cdef cpFloat sa = SoftShapeSize(arb.a)
+    cdef cpFloat sb = SoftShapeSize(arb.b)
+    if sa == 0.0:
+        return sb
+    if sb == 0.0:
+        return sa
+    return fmin(sa, sb)
+
+cdef inline void SoftPointSoftness(SoftPoint *sp, SoftSoftness *base, cpFloat omega,
+                                   cpFloat load, cpFloat size, SoftContext *ctx) noexcept nogil:
+    # A soft contact settles where its bias balances the impulse it leaks:
+    # (compliance / normalMass) * impulse = biasRate * depth. Under a load F
+    # (impulse F h per substep) it sinks compliance F h / (normalMass
+    # biasRate) deep, so the bottom of a tall stack or
+    # pyramid, or a light body under a heavy one, would sink far more than
+    # the top. A point whose last-step load would sink it deeper than
+    # ctx.maxDeflection x `size` leaks less (a smaller compliance); its bias
+    # rate, which sets how fast overlap is pushed out, stays. That is the
+    # implicit spring-damper with stiffness and damping both scaled up by
+    # the same factor, so its damping ratio is kept.
+    cdef cpFloat c, need
+    cdef SoftSoftness s = base[0]
+    c = s.impulseScale / s.massScale if s.massScale > 0.0 else 0.0
+    if load > 0.0 and ctx.maxDeflection > 0.0 and c > 0.0 and size > 0.0:
+        need = ctx.maxDeflection * size * sp.normalMass * s.biasRate / (load * ctx.h)
+        if need < c * (1.0 / SOFT_MAX_STIFFENING):
+            need = c * (1.0 / SOFT_MAX_STIFFENING)
+        if need < c:
+            c = need
+            s.massScale = 1.0 / (1.0 + c)
+            s.impulseScale = c / (1.0 + c)
+    sp.biasRate = s.biasRate
+    sp.massScale = s.massScale
+    sp.impulseScale = s.impulseScale
+    sp.compliance = c
+
+
 cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     cdef cpSpace *space = ctx.space
     cdef cpArray *arbiters = space.arbiters
@@ -289,8 +347,9 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     cdef SoftBody *a
     cdef SoftBody *b
     cdef SoftSoftness soft
-    cdef cpFloat nx, ny, rnA, rnB, rtA, rtB, kN, kT, sep, warm
+    cdef cpFloat nx, ny, rnA, rnB, rtA, rtB, kN, kT, sep, warm, omega, size, load
     cdef cpFloat warmCoef = ctx.h / prev_dt if prev_dt != 0.0 else 0.0
+    cdef cpFloat loadCoef = 1.0 / prev_dt if prev_dt != 0.0 else 0.0
     if not _reserve(&space.softScratch.contacts, &space.softScratch.contactCap,
                     arbiters.num, sizeof(SoftContact)):
         return 0
@@ -306,6 +365,7 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
         a = &ctx.bodies[sc.ia]
         b = &ctx.bodies[sc.ib]
         sc.count = arb.count if arb.count <= 2 else 2
+        size = SoftContactSize(arb)
         nx = arb.n.x
         ny = arb.n.y
         sc.nx = nx
@@ -315,11 +375,13 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
         # Chipmunk adds surface_vr to the relative velocity; only its
         # tangential part is used for friction.
         sc.surfaceT = -arb.surface_vr.x * ny + arb.surface_vr.y * nx
-        soft = (ctx.staticSoft if (a.m_inv == 0.0 and a.i_inv == 0.0)
-                or (b.m_inv == 0.0 and b.i_inv == 0.0) else ctx.contactSoft)
-        sc.biasRate = soft.biasRate
-        sc.massScale = soft.massScale
-        sc.impulseScale = soft.impulseScale
+        if (a.m_inv == 0.0 and a.i_inv == 0.0) or (b.m_inv == 0.0 and b.i_inv == 0.0):
+            soft = ctx.staticSoft
+            omega = ctx.staticOmega
+        else:
+            soft = ctx.contactSoft
+            omega = ctx.contactOmega
+        sc.block = 0
         # Chipmunk skips the warm start of an arbiter's first step.
         warm = 0.0 if arb.state == CP_ARBITER_STATE_FIRST_COLLISION else warmCoef
         for j in range(sc.count):
@@ -338,6 +400,16 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
             kT = a.m_inv + b.m_inv + a.i_inv * rtA * rtA + b.i_inv * rtB * rtB
             sp.normalMass = 1.0 / kN if kN > 0.0 else 0.0
             sp.tangentMass = 1.0 / kT if kT > 0.0 else 0.0
+            # The load that sets the point's stiffness rises at once and
+            # falls slowly (con.jBias, unused by this solver, carries it
+            # between steps): following every dip makes a loaded stack
+            # breathe.
+            load = con.jnAcc * loadCoef
+            if load < SOFT_LOAD_DECAY * con.jBias:
+                load = SOFT_LOAD_DECAY * con.jBias
+            if warm == 0.0:
+                load = 0.0
+            SoftPointSoftness(sp, &soft, omega, load, size, ctx)
             # Separation now, less the anchors' part, which the solver adds
             # back from the bodies' motion within the step.
             sep = ((sp.rBx - sp.rAx + arb.body_b.p.x - arb.body_a.p.x) * nx
@@ -354,11 +426,37 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
             con.nMass = sp.normalMass
             con.tMass = sp.tangentMass
             con.bias = 0.0
-            con.jBias = 0.0
+            con.jBias = load
             con.bounce = sp.relativeVelocity * arb.e
+        if sc.count == 2:
+            SoftPrepareBlock(sc, a, b)
         n += 1
     ctx.contactCount = n
     return 1
+
+# Above this condition number the two normal rows are nearly dependent (the
+# points almost coincide) and are solved one after the other instead.
+cdef const cpFloat SOFT_BLOCK_MAX_CONDITION = 1000.0
+
+cdef inline void SoftPrepareBlock(SoftContact *sc, SoftBody *a, SoftBody *b) noexcept nogil:
+    # The 2x2 normal mass matrix. Solving both points of a manifold at once
+    # (as Box2D 2.x's block solver) keeps a box resting on two corners from
+    # being tipped by the order in which they are solved: the sequential
+    # order is what lets tall stacks buckle.
+    cdef SoftPoint *p1 = &sc.p[0]
+    cdef SoftPoint *p2 = &sc.p[1]
+    cdef cpFloat nx = sc.nx
+    cdef cpFloat ny = sc.ny
+    cdef cpFloat rnA1 = p1.rAx * ny - p1.rAy * nx
+    cdef cpFloat rnB1 = p1.rBx * ny - p1.rBy * nx
+    cdef cpFloat rnA2 = p2.rAx * ny - p2.rAy * nx
+    cdef cpFloat rnB2 = p2.rBx * ny - p2.rBy * nx
+    cdef cpFloat mm = a.m_inv + b.m_inv
+    sc.k11 = mm + a.i_inv * rnA1 * rnA1 + b.i_inv * rnB1 * rnB1
+    sc.k22 = mm + a.i_inv * rnA2 * rnA2 + b.i_inv * rnB2 * rnB2
+    sc.k12 = mm + a.i_inv * rnA1 * rnA2 + b.i_inv * rnB1 * rnB2
+    sc.block = (sc.k11 > 0.0 and sc.k22 > 0.0 and
+                sc.k11 * sc.k11 < SOFT_BLOCK_MAX_CONDITION * (sc.k11 * sc.k22 - sc.k12 * sc.k12))
 
 cdef void SoftWarmStart(SoftContext *ctx) noexcept nogil:
     cdef int i, j
@@ -385,18 +483,86 @@ cdef void SoftWarmStart(SoftContext *ctx) noexcept nogil:
             b.vy += b.m_inv * py
             b.w += b.i_inv * (sp.rBx * py - sp.rBy * px)
 
+cdef inline void SoftSolveBlock(SoftContact *sc, cpFloat *bias, bint *soft,
+                                cpFloat *vax, cpFloat *vay, cpFloat *wa,
+                                cpFloat *vbx, cpFloat *vby, cpFloat *wb,
+                                cpFloat mA, cpFloat iA, cpFloat mB, cpFloat iB) noexcept nogil:
+    # Both normal rows of a two-point manifold at once: the linear
+    # complementarity problem  w = A x + q,  x >= 0, w >= 0, x.w = 0,  for the
+    # accumulated impulses x, with A = K + diag(g) and q = vn + bias - K x0.
+    # A soft row's g = k_ii * compliance is the soft constraint written as an
+    # added compliance ((k + g) dx = -(vn + bias) - g x0 is exactly the
+    # sequential solver's massScale / impulseScale update); rigid rows have
+    # g = 0. The four cases are tried in Box2D 2.x's order.
+    cdef SoftPoint *p1 = &sc.p[0]
+    cdef SoftPoint *p2 = &sc.p[1]
+    cdef cpFloat nx = sc.nx
+    cdef cpFloat ny = sc.ny
+    cdef cpFloat a11 = sc.k11
+    cdef cpFloat a22 = sc.k22
+    cdef cpFloat a12 = sc.k12
+    cdef cpFloat x01 = p1.normalImpulse
+    cdef cpFloat x02 = p2.normalImpulse
+    cdef cpFloat vn1, vn2, q1, q2, det, x1, x2, d1, d2, px, py
+    if soft[0]:
+        a11 += sc.k11 * p1.compliance
+    if soft[1]:
+        a22 += sc.k22 * p2.compliance
+    vn1 = ((vbx[0] - wb[0] * p1.rBy - vax[0] + wa[0] * p1.rAy) * nx
+           + (vby[0] + wb[0] * p1.rBx - vay[0] - wa[0] * p1.rAx) * ny)
+    vn2 = ((vbx[0] - wb[0] * p2.rBy - vax[0] + wa[0] * p2.rAy) * nx
+           + (vby[0] + wb[0] * p2.rBx - vay[0] - wa[0] * p2.rAx) * ny)
+    q1 = vn1 + bias[0] - (sc.k11 * x01 + sc.k12 * x02)
+    q2 = vn2 + bias[1] - (sc.k12 * x01 + sc.k22 * x02)
+    det = a11 * a22 - a12 * a12
+    # Both points push.
+    x1 = -(a22 * q1 - a12 * q2) / det
+    x2 = -(a11 * q2 - a12 * q1) / det
+    if not (x1 >= 0.0 and x2 >= 0.0):
+        # Only the first.
+        x1 = -q1 / a11
+        x2 = 0.0
+        if not (x1 >= 0.0 and a12 * x1 + q2 >= 0.0):
+            # Only the second.
+            x1 = 0.0
+            x2 = -q2 / a22
+            if not (x2 >= 0.0 and a12 * x2 + q1 >= 0.0):
+                # Neither (both separating), or no solution from round-off:
+                # then the impulses stay as they are.
+                x1 = 0.0
+                x2 = 0.0
+                if not (q1 >= 0.0 and q2 >= 0.0):
+                    return
+    d1 = x1 - x01
+    d2 = x2 - x02
+    p1.normalImpulse = x1
+    p2.normalImpulse = x2
+    if x1 > p1.maxNormalImpulse:
+        p1.maxNormalImpulse = x1
+    if x2 > p2.maxNormalImpulse:
+        p2.maxNormalImpulse = x2
+    px = (d1 + d2) * nx
+    py = (d1 + d2) * ny
+    vax[0] -= mA * px
+    vay[0] -= mA * py
+    wa[0] -= iA * ((p1.rAx * ny - p1.rAy * nx) * d1 + (p2.rAx * ny - p2.rAy * nx) * d2)
+    vbx[0] += mB * px
+    vby[0] += mB * py
+    wb[0] += iB * ((p1.rBx * ny - p1.rBy * nx) * d1 + (p2.rBx * ny - p2.rBy * nx) * d2)
+
 cdef void SoftSolve(SoftContext *ctx, bint useBias) noexcept nogil:
     cdef int i, j
     cdef SoftContact *sc
     cdef SoftPoint *sp
     cdef SoftBody *a
     cdef SoftBody *b
-    cdef cpFloat nx, ny, dx, dy, s, bias, massScale, impulseScale, vn, vt, imp, newImp
+    cdef cpFloat nx, ny, dx, dy, s, massScale, impulseScale, vn, vt, imp, newImp
     cdef cpFloat px, py, maxF, prAx, prAy, prBx, prBy
     cdef cpFloat inv_h = ctx.inv_h
     cdef cpFloat pushOut = ctx.pushOut
-    cdef cpFloat slop = ctx.slop
     cdef cpFloat vax, vay, wa, vbx, vby, wb, mA, iA, mB, iB
+    cdef cpFloat bias[2]
+    cdef bint soft[2]
     for i in range(ctx.contactCount):
         sc = &ctx.contacts[i]
         a = &ctx.bodies[sc.ia]
@@ -425,62 +591,72 @@ cdef void SoftSolve(SoftContext *ctx, bint useBias) noexcept nogil:
             s = dx * nx + dy * ny + sp.baseSeparation
             if s > 0.0:
                 # Speculative: let the gap close within the substep, no push.
-                bias = s * inv_h
-                massScale = 1.0
-                impulseScale = 0.0
+                bias[j] = s * inv_h
+                soft[j] = 0
             elif useBias:
-                # Overlap beyond collision_slop is pushed out softly, at most
-                # at pushOut.
-                s += slop
-                bias = sc.biasRate * s if s < 0.0 else 0.0
-                if bias < -pushOut:
-                    bias = -pushOut
-                massScale = sc.massScale
-                impulseScale = sc.impulseScale
+                # Overlap is pushed out softly, at most at pushOut.
+                bias[j] = sp.biasRate * s if s < 0.0 else 0.0
+                if bias[j] < -pushOut:
+                    bias[j] = -pushOut
+                soft[j] = 1
             else:
-                bias = 0.0
-                massScale = 1.0
-                impulseScale = 0.0
-            vn = ((vbx - wb * sp.rBy - vax + wa * sp.rAy) * nx
-                  + (vby + wb * sp.rBx - vay - wa * sp.rAx) * ny)
-            imp = -sp.normalMass * massScale * (vn + bias) - impulseScale * sp.normalImpulse
-            newImp = sp.normalImpulse + imp
-            if newImp < 0.0:
-                newImp = 0.0
-            imp = newImp - sp.normalImpulse
-            sp.normalImpulse = newImp
-            if newImp > sp.maxNormalImpulse:
-                sp.maxNormalImpulse = newImp
-            px = imp * nx
-            py = imp * ny
-            vax -= mA * px
-            vay -= mA * py
-            wa -= iA * (sp.rAx * py - sp.rAy * px)
-            vbx += mB * px
-            vby += mB * py
-            wb += iB * (sp.rBx * py - sp.rBy * px)
+                bias[j] = 0.0
+                soft[j] = 0
+        if sc.block:
+            SoftSolveBlock(sc, bias, soft, &vax, &vay, &wa, &vbx, &vby, &wb, mA, iA, mB, iB)
+        else:
+            for j in range(sc.count):
+                sp = &sc.p[j]
+                if soft[j]:
+                    massScale = sp.massScale
+                    impulseScale = sp.impulseScale
+                else:
+                    massScale = 1.0
+                    impulseScale = 0.0
+                vn = ((vbx - wb * sp.rBy - vax + wa * sp.rAy) * nx
+                      + (vby + wb * sp.rBx - vay - wa * sp.rAx) * ny)
+                imp = (-sp.normalMass * massScale * (vn + bias[j])
+                       - impulseScale * sp.normalImpulse)
+                newImp = sp.normalImpulse + imp
+                if newImp < 0.0:
+                    newImp = 0.0
+                imp = newImp - sp.normalImpulse
+                sp.normalImpulse = newImp
+                if newImp > sp.maxNormalImpulse:
+                    sp.maxNormalImpulse = newImp
+                px = imp * nx
+                py = imp * ny
+                vax -= mA * px
+                vay -= mA * py
+                wa -= iA * (sp.rAx * py - sp.rAy * px)
+                vbx += mB * px
+                vby += mB * py
+                wb += iB * (sp.rBx * py - sp.rBy * px)
         # Friction, bounded by this substep's normal impulse (Coulomb).
-        for j in range(sc.count):
-            sp = &sc.p[j]
-            vt = ((vbx - wb * sp.rBy - vax + wa * sp.rAy) * (-ny)
-                  + (vby + wb * sp.rBx - vay - wa * sp.rAx) * nx) + sc.surfaceT
-            imp = -sp.tangentMass * vt
-            maxF = sc.friction * sp.normalImpulse
-            newImp = sp.tangentImpulse + imp
-            if newImp < -maxF:
-                newImp = -maxF
-            elif newImp > maxF:
-                newImp = maxF
-            imp = newImp - sp.tangentImpulse
-            sp.tangentImpulse = newImp
-            px = -imp * ny
-            py = imp * nx
-            vax -= mA * px
-            vay -= mA * py
-            wa -= iA * (sp.rAx * py - sp.rAy * px)
-            vbx += mB * px
-            vby += mB * py
-            wb += iB * (sp.rBx * py - sp.rBy * px)
+        # Friction only in the relax pass, as Box2D 3.2 does: there the
+        # normal impulses that bound it are final for the substep.
+        if not useBias:
+            for j in range(sc.count):
+                sp = &sc.p[j]
+                vt = ((vbx - wb * sp.rBy - vax + wa * sp.rAy) * (-ny)
+                      + (vby + wb * sp.rBx - vay - wa * sp.rAx) * nx) + sc.surfaceT
+                imp = -sp.tangentMass * vt
+                maxF = sc.friction * sp.normalImpulse
+                newImp = sp.tangentImpulse + imp
+                if newImp < -maxF:
+                    newImp = -maxF
+                elif newImp > maxF:
+                    newImp = maxF
+                imp = newImp - sp.tangentImpulse
+                sp.tangentImpulse = newImp
+                px = -imp * ny
+                py = imp * nx
+                vax -= mA * px
+                vay -= mA * py
+                wa -= iA * (sp.rAx * py - sp.rAy * px)
+                vbx += mB * px
+                vby += mB * py
+                wb += iB * (sp.rBx * py - sp.rBy * px)
         # Slot 0 (immovable) takes no impulse: its inverse masses are 0.
         a.vx = vax
         a.vy = vay
@@ -664,7 +840,7 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     cdef SoftContext ctx
     cdef cpFloat prev_dt
     cdef cpFloat hertz, staticHertz
-    cdef int collided, k
+    cdef int collided, k, r
     cdef bint ready
     if dt == 0.0:
         return
@@ -680,17 +856,20 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     ctx.gy = space.gravity.y
     ctx.damping = pow(space.damping, ctx.h)
     ctx.pushOut = SoftPushOut(space)
-    ctx.slop = space.collisionSlop
     # Stiffer than a quarter of the substep rate would not be resolved.
     hertz = space.soft.contactHertz
     if hertz > 0.25 * ctx.inv_h:
         hertz = 0.25 * ctx.inv_h
-    ctx.contactSoft = SoftMakeSoft(hertz, space.soft.contactDampingRatio, ctx.h)
+    ctx.dampingRatio = space.soft.contactDampingRatio
+    ctx.contactOmega = SoftOmega(hertz)
+    ctx.contactSoft = SoftMakeSoftOmega(ctx.contactOmega, ctx.dampingRatio, ctx.h)
     # Against immovable bodies twice as stiff, within the same cap.
     staticHertz = 2.0 * hertz
     if staticHertz > 0.25 * ctx.inv_h:
         staticHertz = 0.25 * ctx.inv_h
-    ctx.staticSoft = SoftMakeSoft(staticHertz, space.soft.contactDampingRatio, ctx.h)
+    ctx.staticOmega = SoftOmega(staticHertz)
+    ctx.staticSoft = SoftMakeSoftOmega(ctx.staticOmega, ctx.dampingRatio, ctx.h)
+    ctx.maxDeflection = SOFT_MAX_LOAD_DEFLECTION
     ctx.contactCount = 0
     ctx.jointBodyCount = 0
     space.collideMargin = SoftSpeculative(space)
@@ -717,8 +896,9 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
             SoftJointsSolve(&ctx)
             SoftSolve(&ctx, 1)
             SoftIntegratePositions(&ctx)
-            SoftJointsSolve(&ctx)
-            SoftRelax(&ctx)
+            for r in range(SOFT_RELAX_ITERATIONS):
+                SoftJointsSolve(&ctx)
+                SoftRelax(&ctx)
             SoftAccumulate(&ctx)
         SoftApplyRestitution(&ctx)
         SoftStoreImpulses(&ctx)

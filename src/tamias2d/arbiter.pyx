@@ -233,6 +233,9 @@ cdef void cpArbiterUpdate(cpArbiter *arb, cpCollisionInfo *info, cpSpace *space)
         con.r2 = cpvsub(con.r2, b.body.p)
         con.jnAcc = 0.0
         con.jtAcc = 0.0
+        # The chipmunk solver zeroes jBias in its pre-step; the soft solver
+        # keeps a point's load in it from step to step.
+        con.jBias = 0.0
         # Warm start: take the impulses of an old contact with the same
         # feature hash; the last match wins.
         for j in range(arb.count):
@@ -240,6 +243,7 @@ cdef void cpArbiterUpdate(cpArbiter *arb, cpCollisionInfo *info, cpSpace *space)
             if con.hash == old.hash:
                 con.jnAcc = old.jnAcc
                 con.jtAcc = old.jtAcc
+                con.jBias = old.jBias
 
     arb.contacts = info.arr
     arb.count = info.count
