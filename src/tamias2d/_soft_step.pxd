@@ -68,6 +68,7 @@ cdef struct SoftBody:
 # separation), masses and impulses.
 cdef struct SoftPoint:
     cpFloat rAx, rAy, rBx, rBy
+    cpFloat rnA, rnB, rtA, rtB                # cross(r, n), cross(r, tangent) = r . n
     cpFloat baseSeparation
     cpFloat normalMass, tangentMass
     cpFloat normalImpulse, tangentImpulse     # this substep's (warm start)

@@ -393,10 +393,14 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
             sp.rBy = con.r2.y
             rnA = sp.rAx * ny - sp.rAy * nx
             rnB = sp.rBx * ny - sp.rBy * nx
+            sp.rnA = rnA
+            sp.rnB = rnB
             kN = a.m_inv + b.m_inv + a.i_inv * rnA * rnA + b.i_inv * rnB * rnB
             # tangent t = perp(n) = (-ny, nx): cross(r, t) = r . n
             rtA = sp.rAx * nx + sp.rAy * ny
             rtB = sp.rBx * nx + sp.rBy * ny
+            sp.rtA = rtA
+            sp.rtB = rtB
             kT = a.m_inv + b.m_inv + a.i_inv * rtA * rtA + b.i_inv * rtB * rtB
             sp.normalMass = 1.0 / kN if kN > 0.0 else 0.0
             sp.tangentMass = 1.0 / kT if kT > 0.0 else 0.0
@@ -447,10 +451,10 @@ cdef inline void SoftPrepareBlock(SoftContact *sc, SoftBody *a, SoftBody *b) noe
     cdef SoftPoint *p2 = &sc.p[1]
     cdef cpFloat nx = sc.nx
     cdef cpFloat ny = sc.ny
-    cdef cpFloat rnA1 = p1.rAx * ny - p1.rAy * nx
-    cdef cpFloat rnB1 = p1.rBx * ny - p1.rBy * nx
-    cdef cpFloat rnA2 = p2.rAx * ny - p2.rAy * nx
-    cdef cpFloat rnB2 = p2.rBx * ny - p2.rBy * nx
+    cdef cpFloat rnA1 = p1.rnA
+    cdef cpFloat rnB1 = p1.rnB
+    cdef cpFloat rnA2 = p2.rnA
+    cdef cpFloat rnB2 = p2.rnB
     cdef cpFloat mm = a.m_inv + b.m_inv
     sc.k11 = mm + a.i_inv * rnA1 * rnA1 + b.i_inv * rnB1 * rnB1
     sc.k22 = mm + a.i_inv * rnA2 * rnA2 + b.i_inv * rnB2 * rnB2
@@ -483,86 +487,26 @@ cdef void SoftWarmStart(SoftContext *ctx) noexcept nogil:
             b.vy += b.m_inv * py
             b.w += b.i_inv * (sp.rBx * py - sp.rBy * px)
 
-cdef inline void SoftSolveBlock(SoftContact *sc, cpFloat *bias, bint *soft,
-                                cpFloat *vax, cpFloat *vay, cpFloat *wa,
-                                cpFloat *vbx, cpFloat *vby, cpFloat *wb,
-                                cpFloat mA, cpFloat iA, cpFloat mB, cpFloat iB) noexcept nogil:
-    # Both normal rows of a two-point manifold at once: the linear
-    # complementarity problem  w = A x + q,  x >= 0, w >= 0, x.w = 0,  for the
-    # accumulated impulses x, with A = K + diag(g) and q = vn + bias - K x0.
-    # A soft row's g = k_ii * compliance is the soft constraint written as an
-    # added compliance ((k + g) dx = -(vn + bias) - g x0 is exactly the
-    # sequential solver's massScale / impulseScale update); rigid rows have
-    # g = 0. The four cases are tried in Box2D 2.x's order.
-    cdef SoftPoint *p1 = &sc.p[0]
-    cdef SoftPoint *p2 = &sc.p[1]
-    cdef cpFloat nx = sc.nx
-    cdef cpFloat ny = sc.ny
-    cdef cpFloat a11 = sc.k11
-    cdef cpFloat a22 = sc.k22
-    cdef cpFloat a12 = sc.k12
-    cdef cpFloat x01 = p1.normalImpulse
-    cdef cpFloat x02 = p2.normalImpulse
-    cdef cpFloat vn1, vn2, q1, q2, det, x1, x2, d1, d2, px, py
-    if soft[0]:
-        a11 += sc.k11 * p1.compliance
-    if soft[1]:
-        a22 += sc.k22 * p2.compliance
-    vn1 = ((vbx[0] - wb[0] * p1.rBy - vax[0] + wa[0] * p1.rAy) * nx
-           + (vby[0] + wb[0] * p1.rBx - vay[0] - wa[0] * p1.rAx) * ny)
-    vn2 = ((vbx[0] - wb[0] * p2.rBy - vax[0] + wa[0] * p2.rAy) * nx
-           + (vby[0] + wb[0] * p2.rBx - vay[0] - wa[0] * p2.rAx) * ny)
-    q1 = vn1 + bias[0] - (sc.k11 * x01 + sc.k12 * x02)
-    q2 = vn2 + bias[1] - (sc.k12 * x01 + sc.k22 * x02)
-    det = a11 * a22 - a12 * a12
-    # Both points push.
-    x1 = -(a22 * q1 - a12 * q2) / det
-    x2 = -(a11 * q2 - a12 * q1) / det
-    if not (x1 >= 0.0 and x2 >= 0.0):
-        # Only the first.
-        x1 = -q1 / a11
-        x2 = 0.0
-        if not (x1 >= 0.0 and a12 * x1 + q2 >= 0.0):
-            # Only the second.
-            x1 = 0.0
-            x2 = -q2 / a22
-            if not (x2 >= 0.0 and a12 * x2 + q1 >= 0.0):
-                # Neither (both separating), or no solution from round-off:
-                # then the impulses stay as they are.
-                x1 = 0.0
-                x2 = 0.0
-                if not (q1 >= 0.0 and q2 >= 0.0):
-                    return
-    d1 = x1 - x01
-    d2 = x2 - x02
-    p1.normalImpulse = x1
-    p2.normalImpulse = x2
-    if x1 > p1.maxNormalImpulse:
-        p1.maxNormalImpulse = x1
-    if x2 > p2.maxNormalImpulse:
-        p2.maxNormalImpulse = x2
-    px = (d1 + d2) * nx
-    py = (d1 + d2) * ny
-    vax[0] -= mA * px
-    vay[0] -= mA * py
-    wa[0] -= iA * ((p1.rAx * ny - p1.rAy * nx) * d1 + (p2.rAx * ny - p2.rAy * nx) * d2)
-    vbx[0] += mB * px
-    vby[0] += mB * py
-    wb[0] += iB * ((p1.rBx * ny - p1.rBy * nx) * d1 + (p2.rBx * ny - p2.rBy * nx) * d2)
-
 cdef void SoftSolve(SoftContext *ctx, bint useBias) noexcept nogil:
+    # One Gauss-Seidel pass over the contacts: with useBias the soft,
+    # biased solve; without it the rigid relax pass, which also solves
+    # friction. Velocities along n and t are a shared linear part plus each
+    # point's angular part (cross products prepared once per step).
     cdef int i, j
     cdef SoftContact *sc
     cdef SoftPoint *sp
+    cdef SoftPoint *p1
+    cdef SoftPoint *p2
     cdef SoftBody *a
     cdef SoftBody *b
-    cdef cpFloat nx, ny, dx, dy, s, massScale, impulseScale, vn, vt, imp, newImp
-    cdef cpFloat px, py, maxF, prAx, prAy, prBx, prBy
+    cdef cpFloat nx, ny, dx, dy, s, lin, vn, vt, imp, newImp, maxF
+    cdef cpFloat prAx, prAy, prBx, prBy
     cdef cpFloat inv_h = ctx.inv_h
     cdef cpFloat pushOut = ctx.pushOut
     cdef cpFloat vax, vay, wa, vbx, vby, wb, mA, iA, mB, iB
+    cdef cpFloat a11, a22, a12, x01, x02, q1, q2, det, x1, x2, d1, d2
     cdef cpFloat bias[2]
-    cdef bint soft[2]
+    cdef cpFloat gamma[2]      # a soft row's compliance (0: rigid)
     for i in range(ctx.contactCount):
         sc = &ctx.contacts[i]
         a = &ctx.bodies[sc.ia]
@@ -592,31 +536,77 @@ cdef void SoftSolve(SoftContext *ctx, bint useBias) noexcept nogil:
             if s > 0.0:
                 # Speculative: let the gap close within the substep, no push.
                 bias[j] = s * inv_h
-                soft[j] = 0
+                gamma[j] = 0.0
             elif useBias:
                 # Overlap is pushed out softly, at most at pushOut.
-                bias[j] = sp.biasRate * s if s < 0.0 else 0.0
+                bias[j] = sp.biasRate * s
                 if bias[j] < -pushOut:
                     bias[j] = -pushOut
-                soft[j] = 1
+                gamma[j] = sp.compliance
             else:
                 bias[j] = 0.0
-                soft[j] = 0
+                gamma[j] = 0.0
         if sc.block:
-            SoftSolveBlock(sc, bias, soft, &vax, &vay, &wa, &vbx, &vby, &wb, mA, iA, mB, iB)
+            # Both normal rows at once: the linear complementarity problem
+            # w = A x + q, x >= 0, w >= 0, x.w = 0 for the accumulated
+            # impulses x, with A = K + diag(k_ii gamma_i) and
+            # q = vn + bias - K x0. A soft row's added diagonal is the soft
+            # constraint written as a compliance: (k + k gamma) dx =
+            # -(vn + bias) - k gamma x0 is the sequential massScale /
+            # impulseScale update exactly. Cases in Box2D 2.x's order.
+            p1 = &sc.p[0]
+            p2 = &sc.p[1]
+            lin = (vbx - vax) * nx + (vby - vay) * ny
+            x01 = p1.normalImpulse
+            x02 = p2.normalImpulse
+            a12 = sc.k12
+            a11 = sc.k11 * (1.0 + gamma[0])
+            a22 = sc.k22 * (1.0 + gamma[1])
+            q1 = (lin + wb * p1.rnB - wa * p1.rnA + bias[0]
+                  - (sc.k11 * x01 + a12 * x02))
+            q2 = (lin + wb * p2.rnB - wa * p2.rnA + bias[1]
+                  - (a12 * x01 + sc.k22 * x02))
+            det = a11 * a22 - a12 * a12
+            x1 = (a12 * q2 - a22 * q1) / det
+            x2 = (a12 * q1 - a11 * q2) / det
+            if not (x1 >= 0.0 and x2 >= 0.0):
+                # Only the first point pushes.
+                x1 = -q1 / a11
+                x2 = 0.0
+                if not (x1 >= 0.0 and a12 * x1 + q2 >= 0.0):
+                    # Only the second.
+                    x1 = 0.0
+                    x2 = -q2 / a22
+                    if not (x2 >= 0.0 and a12 * x2 + q1 >= 0.0):
+                        # Neither: both separate; with no solution at all
+                        # (round-off) the impulses stay.
+                        x1 = 0.0
+                        x2 = 0.0
+                        if not (q1 >= 0.0 and q2 >= 0.0):
+                            x1 = x01
+                            x2 = x02
+            d1 = x1 - x01
+            d2 = x2 - x02
+            p1.normalImpulse = x1
+            p2.normalImpulse = x2
+            if x1 > p1.maxNormalImpulse:
+                p1.maxNormalImpulse = x1
+            if x2 > p2.maxNormalImpulse:
+                p2.maxNormalImpulse = x2
+            imp = d1 + d2
+            vax -= mA * imp * nx
+            vay -= mA * imp * ny
+            wa -= iA * (p1.rnA * d1 + p2.rnA * d2)
+            vbx += mB * imp * nx
+            vby += mB * imp * ny
+            wb += iB * (p1.rnB * d1 + p2.rnB * d2)
         else:
             for j in range(sc.count):
                 sp = &sc.p[j]
-                if soft[j]:
-                    massScale = sp.massScale
-                    impulseScale = sp.impulseScale
-                else:
-                    massScale = 1.0
-                    impulseScale = 0.0
-                vn = ((vbx - wb * sp.rBy - vax + wa * sp.rAy) * nx
-                      + (vby + wb * sp.rBx - vay - wa * sp.rAx) * ny)
-                imp = (-sp.normalMass * massScale * (vn + bias[j])
-                       - impulseScale * sp.normalImpulse)
+                # (k + k gamma) dx = -(vn + bias) - k gamma x0, k = 1 / normalMass
+                vn = ((vbx - vax) * nx + (vby - vay) * ny) + wb * sp.rnB - wa * sp.rnA
+                imp = (-(sp.normalMass * (vn + bias[j]) + gamma[j] * sp.normalImpulse)
+                       / (1.0 + gamma[j]))
                 newImp = sp.normalImpulse + imp
                 if newImp < 0.0:
                     newImp = 0.0
@@ -624,22 +614,19 @@ cdef void SoftSolve(SoftContext *ctx, bint useBias) noexcept nogil:
                 sp.normalImpulse = newImp
                 if newImp > sp.maxNormalImpulse:
                     sp.maxNormalImpulse = newImp
-                px = imp * nx
-                py = imp * ny
-                vax -= mA * px
-                vay -= mA * py
-                wa -= iA * (sp.rAx * py - sp.rAy * px)
-                vbx += mB * px
-                vby += mB * py
-                wb += iB * (sp.rBx * py - sp.rBy * px)
-        # Friction, bounded by this substep's normal impulse (Coulomb).
-        # Friction only in the relax pass, as Box2D 3.2 does: there the
-        # normal impulses that bound it are final for the substep.
+                vax -= mA * imp * nx
+                vay -= mA * imp * ny
+                wa -= iA * imp * sp.rnA
+                vbx += mB * imp * nx
+                vby += mB * imp * ny
+                wb += iB * imp * sp.rnB
         if not useBias:
+            # Friction only in the relax pass, as Box2D 3.2 does: there the
+            # normal impulses that bound it are final for the substep.
+            # Tangent t = perp(n) = (-ny, nx).
             for j in range(sc.count):
                 sp = &sc.p[j]
-                vt = ((vbx - wb * sp.rBy - vax + wa * sp.rAy) * (-ny)
-                      + (vby + wb * sp.rBx - vay - wa * sp.rAx) * nx) + sc.surfaceT
+                vt = ((vby - vay) * nx - (vbx - vax) * ny) + wb * sp.rtB - wa * sp.rtA + sc.surfaceT
                 imp = -sp.tangentMass * vt
                 maxF = sc.friction * sp.normalImpulse
                 newImp = sp.tangentImpulse + imp
@@ -649,14 +636,12 @@ cdef void SoftSolve(SoftContext *ctx, bint useBias) noexcept nogil:
                     newImp = maxF
                 imp = newImp - sp.tangentImpulse
                 sp.tangentImpulse = newImp
-                px = -imp * ny
-                py = imp * nx
-                vax -= mA * px
-                vay -= mA * py
-                wa -= iA * (sp.rAx * py - sp.rAy * px)
-                vbx += mB * px
-                vby += mB * py
-                wb += iB * (sp.rBx * py - sp.rBy * px)
+                vax += mA * imp * ny
+                vay -= mA * imp * nx
+                wa -= iA * imp * sp.rtA
+                vbx -= mB * imp * ny
+                vby += mB * imp * nx
+                wb += iB * imp * sp.rtB
         # Slot 0 (immovable) takes no impulse: its inverse masses are 0.
         a.vx = vax
         a.vy = vay
