@@ -100,13 +100,30 @@ class _Canvas:
         self.options.transform = tamias2d.Transform.identity()
 
 
+def _pygame_options(screen):
+    """pygame_util.DrawOptions, with see-through polygon fills (pygame's
+    draw functions ignore alpha; Pillow's drawing blends it)."""
+    import pygame
+    from tamias2d import pygame_util
+
+    class DrawOptions(pygame_util.DrawOptions):
+        def draw_polygon(self, verts, radius, outline_color, fill_color):
+            if fill_color.a >= 255:
+                return super().draw_polygon(verts, radius, outline_color, fill_color)
+            layer = pygame.Surface(self.surface.get_size(), pygame.SRCALPHA)
+            points = [pygame_util.to_pygame(v, self.surface) for v in verts]
+            pygame.draw.polygon(layer, fill_color.as_int(), points)
+            self.surface.blit(layer, (0, 0))
+
+    pygame_util.positive_y_is_up = True
+    return DrawOptions(screen)
+
+
 class _PygameCanvas(_Canvas):
     def __init__(self, screen):
         import pygame
-        from tamias2d import pygame_util
 
-        pygame_util.positive_y_is_up = True
-        super().__init__(pygame_util.DrawOptions(screen), screen.get_size())
+        super().__init__(_pygame_options(screen), screen.get_size())
         self.screen = screen
         self.font = pygame.font.Font(None, 22)
         self._pg = pygame
@@ -226,7 +243,9 @@ def _run_headless(args, update, draw, size, frames):
 def _run_window(args, update, draw, title, size, on_event):
     import pygame
 
-    pygame.init()
+    # Only what the loop uses (no audio: nothing to open on a silent machine).
+    pygame.display.init()
+    pygame.font.init()
     screen = pygame.display.set_mode(size)
     pygame.display.set_caption(title)
     canvas = _PygameCanvas(screen)

@@ -42,7 +42,7 @@ for x in (-38, 38):
     wheel = tamias2d.Body(2, tamias2d.moment_for_circle(2, 0, 20))
     wheel.position = chassis.position + (x, -28)
     tyre = tamias2d.Circle(wheel, 20)
-    tyre.friction, tyre.filter, tyre.color = 1.5, car, _common.INK + (255,)
+    tyre.friction, tyre.filter, tyre.color = 1.5, car, (95, 100, 110, 255)
     groove = tamias2d.GrooveJoint(chassis, wheel, (x, -10), (x, -35), (0, 0))
     spring = tamias2d.DampedSpring(chassis, wheel, (x, 0), (0, 0),
                                    rest_length=35, stiffness=900, damping=40)

@@ -70,8 +70,8 @@ zone.color = (241, 196, 15, 90)
 space.add(zone)
 in_zone = set()
 space.on_collision(BALL, ZONE,
-                   begin=lambda arb, space, data: in_zone.add(arb.bodies[0]),
-                   separate=lambda arb, space, data: in_zone.discard(arb.bodies[0]))
+                   begin=lambda arb, space, data: in_zone.add(arb.shapes[0]),
+                   separate=lambda arb, space, data: in_zone.discard(arb.shapes[0]))
 
 # -- a bridge of planks on breakable joints ----------------------------------
 segment((620, 20), (620, 300), radius=6)
