@@ -18,7 +18,7 @@ import _common
 import tamias2d
 
 BALL, PLATFORM, ZONE = 1, 2, 3  # collision types
-BREAK_FORCE = 30000.0  # newtons, in the units of the scene (px, kg, s)
+BREAK_FORCE = 30000.0  # a force, in the scene's units (kg px / s^2)
 
 space = tamias2d.Space()
 space.gravity = (0, -900)

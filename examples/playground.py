@@ -60,13 +60,15 @@ def press(p, button, shift=False):
     body = body_at(p)
     if button == 1 and body is not None:
         drag = tamias2d.PivotJoint(mouse_body, body, (0, 0), body.world_to_local(p))
-        drag.max_force = 200000   # strong enough to lift, too weak to crush
+        drag.max_force = 200000   # a capped pull: walls and heavy piles still win
         drag.error_bias = (1 - 0.15) ** 60  # close 15% of the gap per frame
         space.add(drag)
     elif button == 1:
         add_body(p, ball=shift)
     elif button == 3 and body is not None:
-        space.remove(body, *body.shapes, *body.constraints)
+        if drag is not None and drag.b is body:
+            release()  # the drag is the only joint a body here can have
+        space.remove(body, *body.shapes)
 
 
 def release():

@@ -124,3 +124,39 @@ def test_rollback_replays_exactly(tmp_path):
                          ["--headless", "--frames", "130", "--out", "r.png"], tmp_path)
     assert result.returncode == 0, result.stdout + result.stderr
     assert "2 rollbacks, 120 frames replayed, 0 differed" in result.stdout
+
+
+def test_playground_mouse(monkeypatch):
+    # The window's mouse handling, fed pygame events in this process.
+    pygame = pytest.importorskip("pygame")
+    import runpy
+
+    monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
+    monkeypatch.syspath_prepend(str(EXAMPLES_DIR))
+    pygame.display.init()
+    try:
+        g = runpy.run_path(str(EXAMPLES_DIR / "playground.py"), run_name="playground")
+        space, on_event = g["space"], g["on_event"]
+        height = g["HEIGHT"]
+
+        def click(kind, world, button=1):
+            on_event(pygame.event.Event(kind, pos=(world[0], height - world[1]),
+                                        button=button))
+
+        n = len(space.bodies)
+        click(pygame.MOUSEBUTTONDOWN, (600, 400))          # empty: adds a box
+        assert len(space.bodies) == n + 1
+        toy = g["toy"]
+        click(pygame.MOUSEBUTTONDOWN, tuple(toy.position))  # on a body: grabs it
+        drag = on_event.__globals__["drag"]
+        assert drag is not None and drag.b is toy and drag in space.constraints
+        click(pygame.MOUSEBUTTONUP, (0, 0))
+        assert on_event.__globals__["drag"] is None and drag not in space.constraints
+        click(pygame.MOUSEBUTTONDOWN, tuple(toy.position))  # grabbed again ...
+        drag = on_event.__globals__["drag"]
+        click(pygame.MOUSEBUTTONDOWN, tuple(toy.position), button=3)  # ... and deleted
+        assert on_event.__globals__["drag"] is None and drag not in space.constraints
+        assert toy not in space.bodies and len(space.bodies) == n
+        click(pygame.MOUSEBUTTONUP, (0, 0))                 # releasing then is harmless
+    finally:
+        pygame.display.quit()
