@@ -62,6 +62,9 @@ autoclass_content = "class"
 autodoc_typehints = "signature"
 add_module_names = False
 
+# Curly quotes and ellipses, but "--" stays two hyphens (command-line options).
+smartquotes_action = "qe"
+
 
 html_theme = "furo" if __import__("importlib").util.find_spec("furo") else "alabaster"
 html_title = f"tamias2d {release}"

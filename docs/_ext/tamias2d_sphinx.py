@@ -23,7 +23,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
-import time
+import textwrap
 from pathlib import Path
 
 from docutils import nodes
@@ -206,22 +206,24 @@ def run_example(path, cache_dir, frames, timeout):
     env.setdefault("SDL_VIDEODRIVER", "dummy")  # pygame examples: no window
     env.setdefault("SDL_AUDIODRIVER", "dummy")
     env.setdefault("MPLBACKEND", "Agg")
-    start = time.time()
+    # PNGs beside the example before the run: one written there by the run is
+    # new or newer.
+    before = {p: p.stat().st_mtime_ns for p in path.parent.glob("*.png")}
     with tempfile.TemporaryDirectory(prefix="tamias2d-example-") as cwd:
         try:
             proc = subprocess.run(
                 [sys.executable, str(path.resolve()), "--headless", "--frames", str(frames)],
                 cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout)
         except subprocess.TimeoutExpired:
-            return None, f"``--headless --frames {frames}`` did not end within {timeout} s"
+            return None, f"it did not end within {timeout} s"
         if proc.returncode != 0:
             last = (proc.stderr.strip().splitlines() or ["no output"])[-1]
-            return None, f"``--headless --frames {frames}`` exited with {proc.returncode}: {last}"
+            return None, f"it exited with status {proc.returncode}: {last}"
         # The example may write into the folder it runs in or next to itself.
         written = [p for p in Path(cwd).rglob("*.png")]
-        written += [p for p in path.parent.glob("*.png") if p.stat().st_mtime >= start - 1]
+        written += [p for p in path.parent.glob("*.png") if before.get(p) != p.stat().st_mtime_ns]
         if not written:
-            return None, f"``--headless --frames {frames}`` wrote no PNG"
+            return None, "it wrote no PNG"
         named = [p for p in written if p.stem.startswith(path.stem)]
         picture = max(named or written, key=lambda p: p.stat().st_mtime)
         shutil.copyfile(picture, cached)
@@ -240,14 +242,15 @@ def collect_examples(examples_dir, cache_dir, run=True, frames=60, timeout=120):
         if path.name.startswith("_"):
             continue
         doc, problem = _module_docstring(path)
-        picture, note = _committed_picture(path), problem
+        picture, note, command = _committed_picture(path), problem, None
         if picture is None and problem is None:
             if run:
+                command = f"python examples/{path.name} --headless --frames {frames}"
                 picture, note = run_example(path, cache_dir, frames, timeout)
             else:
-                note = "not run in this build (``tamias2d_gallery_run = False``)"
+                note = "not run in this build (tamias2d_gallery_run is off)"
         entries.append({"name": path.stem, "path": path, "docstring": doc,
-                        "picture": picture, "note": note})
+                        "picture": picture, "note": note, "picture_command": command})
     return entries
 
 
@@ -258,7 +261,8 @@ def _paragraphs(text):
     for block in re.split(r"\n\s*\n", text.strip()):
         lines = block.splitlines()
         if all(line.startswith(("    ", "$ ", ">>> ")) for line in lines) or block.lstrip().startswith(("$ ", "python ")):
-            result.append(nodes.literal_block(block, block))
+            code = textwrap.dedent(block)
+            result.append(nodes.literal_block(code, code, language="text"))
         else:
             result.append(nodes.paragraph(text=" ".join(line.strip() for line in lines)))
     return result
@@ -302,7 +306,12 @@ class GalleryDirective(Directive):
                 section += nodes.image(uri=Path(uri).as_posix(), alt=f"{entry['name']} drawn headless")
             elif entry["note"]:
                 para = nodes.paragraph()
-                para += nodes.emphasis(text=f"No picture: {entry['note']}")
+                para += nodes.emphasis(text="No picture: ")
+                if entry["picture_command"]:
+                    para += nodes.Text("the build ran ")
+                    para += nodes.literal(text=entry["picture_command"])
+                    para += nodes.Text(" and ")
+                para += nodes.Text(entry["note"] + ".")
                 section += para
             command = f"python examples/{entry['path'].name}"
             section += nodes.paragraph(text="Run it from a checkout:")
@@ -317,6 +326,7 @@ class GalleryDirective(Directive):
 
 
 def setup(app):
+    app.setup_extension("sphinx.ext.autodoc")  # its events are connected below
     app.add_config_value("tamias2d_examples_dir", "../examples", "env")
     app.add_config_value("tamias2d_gallery_run", True, "env")
     app.add_config_value("tamias2d_gallery_frames", 60, "env")
