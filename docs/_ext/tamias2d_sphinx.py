@@ -158,11 +158,6 @@ def _process_docstring(app, what, name, obj, options, lines):
             del lines[0]
 
 
-def _process_bases(app, name, obj, options, bases):
-    # "Bases: object" says nothing.
-    bases[:] = [b for b in bases if b is not object]
-
-
 # ---------------------------------------------------------------------------
 # The examples gallery
 # ---------------------------------------------------------------------------
@@ -334,5 +329,4 @@ def setup(app):
     app.add_directive("tamias2d-gallery", GalleryDirective)
     app.connect("autodoc-process-signature", _process_signature)
     app.connect("autodoc-process-docstring", _process_docstring)
-    app.connect("autodoc-process-bases", _process_bases)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}
