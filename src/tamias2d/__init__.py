@@ -26,3 +26,22 @@ from .constraints import (Constraint, PinJoint, SlideJoint, PivotJoint, GrooveJo
     DampedSpring, DampedRotarySpring, RotaryLimitJoint, RatchetJoint, GearJoint, SimpleMotor)
 from ._pymunk_hook import install_as_pymunk
 from ._step_spaces import step_spaces
+
+# The package's public names (`from tamias2d import *`), the documented API of
+# docs/api/; the modules batch, constraints, errors, ... are reached as
+# attributes, as pymunk's are.
+__all__ = [
+    "version", "chipmunk_version",
+    "Vec2d", "BB", "Transform",
+    "Body",
+    "Shape", "Circle", "Segment", "Poly", "ShapeFilter",
+    "PointQueryInfo", "SegmentQueryInfo", "ShapeQueryInfo",
+    "moment_for_circle", "moment_for_segment", "moment_for_box", "moment_for_poly",
+    "area_for_circle", "area_for_segment", "area_for_poly", "centroid_for_poly",
+    "Space", "empty_callback",
+    "Arbiter", "ContactPoint", "ContactPointSet",
+    "Constraint", "PinJoint", "SlideJoint", "PivotJoint", "GrooveJoint", "DampedSpring",
+    "DampedRotarySpring", "RotaryLimitJoint", "RatchetJoint", "GearJoint", "SimpleMotor",
+    "SpaceDebugDrawOptions",
+    "install_as_pymunk", "step_spaces",
+]

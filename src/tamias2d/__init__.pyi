@@ -40,6 +40,22 @@ from .vector import BB as BB
 from .vector import Transform as Transform
 from .vector import Vec2d as Vec2d
 
+__all__ = [
+    "version", "chipmunk_version",
+    "Vec2d", "BB", "Transform",
+    "Body",
+    "Shape", "Circle", "Segment", "Poly", "ShapeFilter",
+    "PointQueryInfo", "SegmentQueryInfo", "ShapeQueryInfo",
+    "moment_for_circle", "moment_for_segment", "moment_for_box", "moment_for_poly",
+    "area_for_circle", "area_for_segment", "area_for_poly", "centroid_for_poly",
+    "Space", "empty_callback",
+    "Arbiter", "ContactPoint", "ContactPointSet",
+    "Constraint", "PinJoint", "SlideJoint", "PivotJoint", "GrooveJoint", "DampedSpring",
+    "DampedRotarySpring", "RotaryLimitJoint", "RatchetJoint", "GearJoint", "SimpleMotor",
+    "SpaceDebugDrawOptions",
+    "install_as_pymunk", "step_spaces",
+]
+
 version: str
 chipmunk_version: str
 

@@ -4,6 +4,23 @@
 # bit; see munk2d-inventory.md, group 4. The test hooks that run the integrators
 # through the C function pointers (_run_velocity_func, _run_position_func) are
 # in _testing.
+"""Rigid bodies: mass, moment of inertia, position, angle and their rates.
+
+A :class:`Body` is one of three types. A dynamic body (the default) is moved
+by forces, gravity and collisions; a kinematic body moves only at the
+velocity the program gives it and pushes dynamic bodies without being pushed
+back; a static body does not move (each space has one, ``space.static_body``,
+for the ground and walls). Shapes attached to a body give it its collision
+geometry and, when they have a density or mass, its mass and moment.
+
+>>> import tamias2d
+>>> body = tamias2d.Body(2, tamias2d.moment_for_circle(2, 0, 1))
+>>> body.body_type == tamias2d.Body.DYNAMIC
+True
+>>> body.apply_impulse_at_local_point((4, 0))
+>>> body.velocity
+Vec2d(2.0, 0.0)
+"""
 import copyreg
 import weakref
 

@@ -63,12 +63,22 @@ cdef int collision_check_flags() except -1
 # -- Python-level contact point sets (pymunk.ContactPoint / ContactPointSet) --------
 cdef class ContactPoint:
     cdef public object point_a
+    """The contact point on the surface of the first shape (a Vec2d, world
+    coordinates)."""
     cdef public object point_b
+    """The contact point on the surface of the second shape (a Vec2d, world
+    coordinates)."""
     cdef public object distance
+    """Signed distance of the two points along the normal: negative when the
+    shapes overlap (the depth of the overlap), positive for a speculative
+    contact of the soft solver that has not closed yet."""
 
 cdef class ContactPointSet:
     cdef public object normal
+    """The collision normal (a unit Vec2d), pointing from the first shape
+    towards the second."""
     cdef public object points
+    """A tuple of the contacts: zero, one or two :class:`ContactPoint`."""
 
 # A ContactPointSet holding the first `count` points of a C set.
 cdef ContactPointSet contact_point_set_from_cp(const cpContactPointSet *cps)

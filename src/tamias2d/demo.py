@@ -315,6 +315,7 @@ class Progress:
         self._start = time.perf_counter()
 
     def update(self, done):
+        """Show that ``done`` of the ``total`` steps have run."""
         if not self.enabled or self.total == 0:
             return
         if self.tty:
@@ -340,6 +341,7 @@ class Progress:
             self.stream.flush()
 
     def close(self):
+        """End the display (on a terminal, move past the bar's line)."""
         if self.enabled and self.tty and self._shown >= 0:
             self.stream.write("\n")
             self.stream.flush()

@@ -948,6 +948,35 @@ class ShapeQueryInfo(NamedTuple):
     contact_point_set: object
 
 
+def _field_docs(cls, **docs):
+    # Field descriptors of a NamedTuple say "Alias for field number N";
+    # say what each field holds instead (help() and the API reference show it).
+    for name, doc in docs.items():
+        getattr(cls, name).__doc__ = doc
+
+
+_field_docs(ShapeFilter,
+    group="Shapes with the same non-zero group never collide (the parts of one "
+          "ragdoll, for instance); 0 is no group.",
+    categories="The categories (a 32-bit set) this shape belongs to.",
+    mask="The categories (a 32-bit set) this shape collides with.")
+_field_docs(PointQueryInfo,
+    shape="The shape queried.",
+    point="The point on the shape's surface nearest to the query point (a Vec2d).",
+    distance="Distance from the query point to that surface point; negative "
+             "when the query point is inside the shape.",
+    gradient="The gradient of that signed distance: a unit Vec2d pointing out of "
+             "the shape, whether the query point is inside or outside.")
+_field_docs(SegmentQueryInfo,
+    shape="The shape hit.",
+    point="The point where the segment first touches the shape (a Vec2d).",
+    normal="The shape's surface normal at that point (a unit Vec2d).",
+    alpha="Where along the query segment the hit is: 0 at its start, 1 at its end.")
+_field_docs(ShapeQueryInfo,
+    shape="A shape that the query shape overlaps.",
+    contact_point_set="Their contacts, as a :class:`~tamias2d.ContactPointSet`.")
+
+
 # -- argument checks ---------------------------------------------------------------
 cdef cpFloat _radius_arg(object value, str what) except? -1.0:
     cdef cpFloat r

@@ -71,6 +71,9 @@ cdef class Space:
     cdef bint _overflowed        # the last step left a non-finite body (checked again before the next)
     cdef object _callback_error  # the first exception raised in a callback, or None
     cdef public object threaded
+    """Whether the space was made with ``threaded=True`` (pymunk's flag; False
+    on Windows, as in pymunk). tamias2d always solves on the calling thread,
+    so the flag changes no number: see :attr:`threads`."""
     cdef dict __dict__
     cdef object __weakref__
 

@@ -765,7 +765,9 @@ cdef class Space:
     :meth:`on_collision`.
 
     ``threaded`` is accepted for pymunk compatibility; the solver always runs
-    on one thread (which keeps it deterministic).
+    on one thread (which keeps it deterministic). ``solver`` (keyword only,
+    not in pymunk) picks the contact solver: ``"chipmunk"``, pymunk's and the
+    default, or ``"soft"``, a soft step with substeps (see :attr:`solver`).
 
     >>> import tamias2d
     >>> space = tamias2d.Space()

@@ -101,6 +101,12 @@ class SpaceDebugColor(NamedTuple):
         return tuple(c / 255.0 for c in self)
 
 
+SpaceDebugColor.r.__doc__ = "Red, nominally 0..255."
+SpaceDebugColor.g.__doc__ = "Green, nominally 0..255."
+SpaceDebugColor.b.__doc__ = "Blue, nominally 0..255."
+SpaceDebugColor.a.__doc__ = "Alpha (opacity), nominally 0..255: 255 is opaque."
+
+
 class SpaceDebugDrawOptions(object):
     """Settings and drawing callbacks for ``Space.debug_draw``.
 
