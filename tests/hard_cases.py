@@ -759,6 +759,293 @@ def _with_e0(build):
     return wrapped
 
 
+# -- classic scenes (the soft solver's issue) -----------------------------------------------
+# Criteria fixed before the scenes were first run.
+
+def _card(mod, space, x, y, angle, length, thick, friction):
+    body = mod.Body(1.0, box_moment(1.0, thick, length))
+    body.position = x, y
+    body.angle = angle
+    shape = mod.Poly.create_box(body, (thick, length))
+    shape.friction = friction
+    space.add(body, shape)
+    return body
+
+
+def build_card_house(mod, levels=3, length=40.0, thick=1.0, lean=0.3, pitch=30.0,
+                     friction=0.8):
+    """A house of cards: `levels` levels of A-frames (two cards `thick` x
+    `length` leaning `lean` rad from the vertical, top corners touching),
+    flat cards bridging neighbouring A-frames, the next level on the flats.
+    Everything touches exactly; mass 1 per card."""
+    space = _space(mod)
+    _ground(mod, space, friction=friction)
+    c, s = math.cos(lean), math.sin(lean)
+    apex = length * c + thick * s          # the cards' highest corners
+    cx = length / 2.0 * s + thick / 2.0 * c
+    cy = length / 2.0 * c + thick / 2.0 * s
+    cards = []
+    base = 0.0
+    for level in range(levels):
+        count = levels - level
+        xs = [(i - (count - 1) / 2.0) * pitch for i in range(count)]
+        for x in xs:
+            cards.append(_card(mod, space, x - cx, base + cy, -lean, length, thick, friction))
+            cards.append(_card(mod, space, x + cx, base + cy, lean, length, thick, friction))
+        top = base + apex
+        if count > 1:
+            for a, b in zip(xs, xs[1:]):
+                cards.append(_card(mod, space, (a + b) / 2.0, top + thick / 2.0, math.pi / 2.0,
+                                   length, thick, friction))
+        base = top + thick
+    return Scene(space, cards=cards, length=length,
+                 home=[(tuple(b.position), b.angle) for b in cards])
+
+
+def _card_probe(scene):
+    home = scene.watch["home"]
+    return {"d": max(math.hypot(b.position.x - p[0], b.position.y - p[1])
+                     for b, (p, a) in zip(scene.watch["cards"], home)),
+            "turn": max(abs(b.angle - a) for b, (p, a) in zip(scene.watch["cards"], home))}
+
+
+def _card_judge(scene, samples):
+    m = {"max move": max(s["d"] for s in samples), "max turn": max(s["turn"] for s in samples)}
+    return m["max move"] < 0.05 * scene.watch["length"] and m["max turn"] < 0.05, m
+
+
+def build_arch(mod, blocks=11, inner=80.0, outer=100.0, friction=0.6):
+    """A semicircular arch of `blocks` trapezoids (the sectors' corners)
+    between radii `inner` and `outer`, standing on the ground, held by
+    friction alone: no joints. Mass 1 per block."""
+    space = _space(mod)
+    _ground(mod, space, friction=friction)
+    stones = []
+    for i in range(blocks):
+        a0 = math.pi * i / blocks
+        a1 = math.pi * (i + 1) / blocks
+        corners = [(inner * math.cos(a0), inner * math.sin(a0)),
+                   (outer * math.cos(a0), outer * math.sin(a0)),
+                   (outer * math.cos(a1), outer * math.sin(a1)),
+                   (inner * math.cos(a1), inner * math.sin(a1))]
+        cx = sum(p[0] for p in corners) / 4.0
+        cy = sum(p[1] for p in corners) / 4.0
+        verts = [(x - cx, y - cy) for x, y in corners]
+        body = mod.Body(1.0, mod.moment_for_poly(1.0, verts))
+        body.position = cx, cy
+        shape = mod.Poly(body, verts)
+        shape.friction = friction
+        space.add(body, shape)
+        stones.append(body)
+    return Scene(space, stones=stones, thick=outer - inner,
+                 home=[(tuple(b.position), b.angle) for b in stones])
+
+
+def _arch_probe(scene):
+    home = scene.watch["home"]
+    return {"d": max(math.hypot(b.position.x - p[0], b.position.y - p[1])
+                     for b, (p, a) in zip(scene.watch["stones"], home)),
+            "turn": max(abs(b.angle - a) for b, (p, a) in zip(scene.watch["stones"], home))}
+
+
+def _arch_judge(scene, samples):
+    m = {"max move": max(s["d"] for s in samples), "max turn": max(s["turn"] for s in samples)}
+    return m["max move"] < 0.05 * scene.watch["thick"] and m["max turn"] < 0.02, m
+
+
+def build_light_on_heavy(mod, ratio=1000.0, size=20.0):
+    """A light box (mass 1) resting on a box `ratio` times heavier, on the
+    ground."""
+    space = _space(mod)
+    _ground(mod, space)
+    heavy = _box(mod, space, 0.0, size / 2.0, size, size, mass=ratio)
+    light = _box(mod, space, 0.0, size * 1.5, size, size, mass=1.0)
+    return Scene(space, light=light, heavy=heavy, size=size)
+
+
+def _light_on_heavy_probe(scene):
+    light, heavy = scene.watch["light"], scene.watch["heavy"]
+    size = scene.watch["size"]
+    return {"gap": abs(size - (light.position.y - heavy.position.y)),
+            "sink": abs(size / 2.0 - heavy.position.y),
+            "dx": max(abs(light.position.x), abs(heavy.position.x))}
+
+
+def _light_on_heavy_judge(scene, samples):
+    size = scene.watch["size"]
+    m = {"max |gap|": max(s["gap"] for s in samples[1:] or samples),
+         "max |sink|": max(s["sink"] for s in samples[1:] or samples),
+         "max drift": max(s["dx"] for s in samples)}
+    return all(v < 0.05 * size for v in m.values()), m
+
+
+RAMP_ANGLE = 0.35   # tan = 0.365
+
+
+def build_ramp(mod, size=20.0, angle=RAMP_ANGLE, sticky=0.6, slippery=0.2):
+    """Two boxes resting on a long static ramp of friction 1 at `angle`:
+    one with friction `sticky` (above tan(angle): it must stay), one with
+    `slippery` (below: it must slide with a = g (sin - mu cos))."""
+    space = _space(mod)
+    c, s = math.cos(angle), math.sin(angle)
+    # the ramp's top surface is the line through the origin along (c, s)
+    seg = mod.Segment(space.static_body, (-4000.0 * c + 5.0 * s, -4000.0 * s - 5.0 * c),
+                      (400.0 * c + 5.0 * s, 400.0 * s - 5.0 * c), 5.0)
+    seg.friction = 1.0
+    space.add(seg)
+    boxes = []
+    # the slippery one below the sticky one, sliding away from it
+    for along, mu in ((40.0, sticky), (-200.0, slippery)):
+        body = mod.Body(1.0, box_moment(1.0, size, size))
+        body.position = along * c - size / 2.0 * s, along * s + size / 2.0 * c
+        body.angle = angle
+        shape = mod.Poly.create_box(body, (size, size))
+        shape.friction = mu
+        space.add(body, shape)
+        boxes.append(body)
+    return Scene(space, sticky=boxes[0], slippery=boxes[1], size=size, angle=angle,
+                 mu=slippery, g=900.0, home=[tuple(b.position) for b in boxes])
+
+
+def _ramp_probe(scene):
+    c, s = math.cos(scene.watch["angle"]), math.sin(scene.watch["angle"])
+    out = []
+    for b, h in zip((scene.watch["sticky"], scene.watch["slippery"]), scene.watch["home"]):
+        out.append(-((b.position.x - h[0]) * c + (b.position.y - h[1]) * s))  # down the slope
+    return {"sticky": out[0], "slippery": out[1]}
+
+
+def _ramp_judge(scene, samples):
+    a = scene.watch["angle"]
+    accel = scene.watch["g"] * (math.sin(a) - scene.watch["mu"] * math.cos(a))
+    t = len(samples) * 10 * DT   # sampled every 10 steps
+    expect = 0.5 * accel * t * t
+    m = {"sticky moved": max(abs(s["sticky"]) for s in samples),
+         "slippery moved / 0.5 a t^2": samples[-1]["slippery"] / expect}
+    return (m["sticky moved"] < 0.05 * scene.watch["size"]
+            and abs(m["slippery moved / 0.5 a t^2"] - 1.0) < 0.1), m
+
+
+def build_overlapping(mod, count=12, size=20.0, seed=7):
+    """`count` boxes created deep inside each other (centres within half a
+    box of one another) just above the ground: they must come apart
+    gently."""
+    import random
+    rng = random.Random(seed)
+    space = _space(mod)
+    _ground(mod, space)
+    boxes = [_box(mod, space, rng.uniform(-0.25, 0.25) * size,
+                  size * (0.5 + rng.uniform(0.0, 0.5)), size, size) for _ in range(count)]
+    return Scene(space, boxes=boxes, size=size)
+
+
+def _deepest_overlap(space):
+    deepest = [0.0]
+
+    def visit(arbiter):
+        for p in arbiter.contact_point_set.points:
+            deepest[0] = min(deepest[0], p.distance)
+    for b in space.bodies:
+        b.each_arbiter(visit)
+    return -deepest[0]
+
+
+def _overlapping_probe(scene):
+    return {"speed": max(math.hypot(*b.velocity) for b in scene.watch["boxes"]),
+            "far": max(math.hypot(*b.position) for b in scene.watch["boxes"]),
+            "overlap": _deepest_overlap(scene.space)}
+
+
+def _overlapping_judge(scene, samples):
+    size = scene.watch["size"]
+    m = {"max speed": max(s["speed"] for s in samples),
+         "farthest": max(s["far"] for s in samples),
+         "final deepest overlap": samples[-1]["overlap"]}
+    return (m["max speed"] < 20.0 * size and m["farthest"] < 20.0 * size
+            and m["final deepest overlap"] < 0.05 * size), m
+
+
+def build_overfilled(mod, columns=20, rows=30, radius=5.0, width=200.0, height=150.0):
+    """A static open box `width` x `height` (walls 10 thick) under
+    `columns` x `rows` circles of radius `radius`, about twice what it
+    holds: they pile up and spill over the walls onto a fenced floor 200
+    below."""
+    space = _space(mod)
+    half = width / 2.0
+    for a, b in (((-half - 5.0, -5.0), (half + 5.0, -5.0)),
+                 ((-half - 5.0, -5.0), (-half - 5.0, height)),
+                 ((half + 5.0, -5.0), (half + 5.0, height))):
+        seg = mod.Segment(space.static_body, a, b, 5.0)
+        seg.friction = 0.5
+        space.add(seg)
+    # a fenced floor 200 below catches what spills over; the box stands on
+    # a solid pedestal, so nothing rolls under it
+    catch = mod.Segment(space.static_body, (-600.0, -205.0), (600.0, -205.0), 5.0)
+    for x in (-600.0, 600.0):
+        fence = mod.Segment(space.static_body, (x, -205.0), (x, -100.0), 5.0)
+        space.add(fence)
+    pedestal = mod.Poly(space.static_body, [(-half - 10.0, -200.0), (half + 10.0, -200.0),
+                                            (half + 10.0, -10.0), (-half - 10.0, -10.0)])
+    catch.friction = pedestal.friction = 0.5
+    space.add(catch, pedestal)
+    balls = []
+    for i in range(rows):
+        for j in range(columns):
+            body = mod.Body(1.0, mod.moment_for_circle(1.0, 0.0, radius))
+            body.position = (j - (columns - 1) / 2.0) * 2.1 * radius, height + 20.0 + i * 2.1 * radius
+            shape = mod.Circle(body, radius)
+            shape.friction = 0.5
+            space.add(body, shape)
+            balls.append(body)
+    return Scene(space, balls=balls, half=half, height=height, radius=radius)
+
+
+def _overfilled_probe(scene):
+    half, height, r = scene.watch["half"], scene.watch["height"], scene.watch["radius"]
+    through = 0
+    for b in scene.watch["balls"]:
+        x, y = b.position
+        if abs(x) < half + 10.0 and y < -0.5 * r:
+            through += 1                     # in the floor or the pedestal
+        elif half - 0.5 * r < abs(x) < half + 10.0 + 0.5 * r and y < height:
+            through += 1                     # inside a wall
+    return {"through": through,
+            "speed": max(math.hypot(*b.velocity) for b in scene.watch["balls"])}
+
+
+def _overfilled_judge(scene, samples):
+    m = {"max inside floor or walls": max(s["through"] for s in samples),
+         "max speed": max(s["speed"] for s in samples)}
+    return m["max inside floor or walls"] == 0 and m["max speed"] < 2000.0, m
+
+
+def build_thin_wall(mod, speed=100.0, radius=0.25, thick=0.1):
+    """A small circle shot at `speed` at a static wall `thick` thick (near
+    face at x = 0), no gravity."""
+    space = _space(mod, gravity=0.0)
+    wall = mod.Poly(space.static_body, [(0.0, -20.0), (thick, -20.0), (thick, 20.0), (0.0, 20.0)])
+    space.add(wall)
+    body = mod.Body(1.0, 0.5 * radius * radius)
+    body.position = -10.3, 0.0
+    body.velocity = speed, 0.0
+    ball = mod.Circle(body, radius)
+    space.add(body, ball)
+    return Scene(space, ball=body, radius=radius)
+
+
+def _thin_wall_judge(scene, samples):
+    worst = max(s["x"] for s in samples)
+    return worst < 0.0, {"max x": worst, "final x": samples[-1]["x"]}
+
+
+def build_scaled_slop(mod, scale=1.0):
+    """The 5-row pyramid with every length, gravity and collision_slop
+    multiplied by `scale`."""
+    scene = build_pyramid(mod, rows=5, s=scale)
+    scene.space.collision_slop = 0.1 * scale
+    return scene
+
+
 def _bind(fn, **kw):
     def built(mod):
         return fn(mod, **kw)
@@ -868,6 +1155,63 @@ def _make_cases():
         "energy stays within [0.5, 1.05] of its start, no NaN",
         _with_e0(build_elastic_gas), _energy_flat_judge, steps=20_000, full_steps=100_000,
         probe=_energy_probe, sample_every=100, group="long run"))
+    # Classic scenes of the soft solver's issue; the criteria were written
+    # before the first run.
+    cases.append(Case(
+        "card_house", "house of cards: 3 levels of leaning card pairs (40 x 1) and flat cards",
+        "no card moves > 0.05 card length or turns > 0.05 rad",
+        build_card_house, _card_judge, steps=300, full_steps=1800, probe=_card_probe,
+        group="classic", abort=lambda s: s["d"] >= 10.0))
+    cases.append(Case(
+        "arch", "semicircular arch of 11 trapezoids, friction only (radii 80-100)",
+        "no block moves > 0.05 arch thickness or turns > 0.02 rad",
+        build_arch, _arch_judge, steps=300, full_steps=1800, probe=_arch_probe,
+        group="classic", abort=lambda s: s["d"] >= 10.0))
+    cases.append(Case(
+        "light_on_heavy_1000", "light box resting on one 1000x heavier",
+        "gap between the boxes, sink into the ground and drift all < 0.05 box",
+        _bind(build_light_on_heavy, ratio=1000.0), _light_on_heavy_judge, steps=300,
+        full_steps=3600, probe=_light_on_heavy_probe, group="mass ratio"))
+    cases.append(Case(
+        "friction_ramp", "boxes on a 0.35 rad ramp: friction 0.6 (> tan) and 0.2 (< tan)",
+        "the 0.6 box moves < 0.05 box; the 0.2 box slides 0.5 a t^2 within 10%",
+        build_ramp, _ramp_judge, steps=120, full_steps=300, probe=_ramp_probe,
+        group="classic"))
+    cases.append(Case(
+        "overlapping_start", "12 boxes created deep inside each other on the ground",
+        "they separate gently: speed < 20 boxes/s, none goes > 20 boxes away, "
+        "final deepest overlap < 0.05 box",
+        build_overlapping, _overlapping_judge, steps=300, full_steps=1800,
+        probe=_overlapping_probe, group="classic"))
+    cases.append(Case(
+        "overfilled_box", "600 circles poured into a box that holds about 300",
+        "no circle ever inside the floor or a wall; speed < 2000",
+        build_overfilled, _overfilled_judge, steps=300, full_steps=1200,
+        probe=_overfilled_probe, group="classic",
+        note="no iterations / substeps setting of the chipmunk solver keeps the circles "
+             "out of the walls under the pile's pressure; Space.solver = 'soft' does"))
+    for name, speed, radius in (("thin_wall", 100.0, 0.25), ("thin_wall_fast", 5000.0, 0.1)):
+        cases.append(Case(
+            name, f"ball r {radius:g} at {speed:g}/s at a static wall 0.1 thick",
+            "the ball's centre never gets past the wall's near face",
+            _bind(build_thin_wall, speed=speed, radius=radius), _thin_wall_judge, steps=60,
+            full_steps=600, probe=_tunnel_probe, sample_every=1, group="tunnelling",
+            abort=lambda s: s["x"] >= 0.0,
+            note="" if speed < 1000.0 else
+            "83 units a step against a 0.1 wall: only continuous collision stops it "
+            "(Space.solver = 'soft')"))
+    for name, s in (("scale_1e-3_slop", 1e-3), ("scale_1e3_slop", 1e3)):
+        cases.append(Case(
+            name, f"5-row pyramid scaled by {s:g} (lengths, gravity and collision_slop)",
+            "positions / scale within 0.05 box of the unscaled run; nothing moves > 0.25 box",
+            _with_home_and_reference(_bind(build_scaled_slop, scale=s)),
+            _scaled_judge_factory("scale"), steps=300, full_steps=3600, probe=_scaled_probe,
+            group="scale", reference=_bind(build_pyramid, rows=5), ref_scale=s))
+    cases.append(Case(
+        "pyramid_60", "pyramid of 60 rows (1,830 boxes)",
+        "no box moves > 0.25 box sideways, the top box sinks < 0.25 box",
+        _with_home(_bind(build_pyramid, rows=60)), _pyramid_judge, steps=60, full_steps=900,
+        probe=_pyramid_probe, group="stacks", abort=lambda s: s["dx"] >= 5.0 or s["sink"] >= 5.0))
     return {c.name: c for c in cases}
 
 
@@ -894,6 +1238,10 @@ FIXES = {
     'scale_1e3': {'slop': 100.0},
     'poly_256_floor': {'iterations': 10, 'substeps': 2},
     'poly_1000_floor': {'iterations': 20, 'substeps': 4},
+    'card_house': {'iterations': 40, 'substeps': 1},
+    'arch': {'iterations': 10, 'substeps': 2},
+    'thin_wall': {'iterations': 10, 'substeps': 8},
+    'pyramid_60': {'iterations': 20, 'substeps': 4},
 }
 
 # The outcome of every case with the default settings in the full runs
@@ -924,4 +1272,15 @@ FULL_DEFAULT = {
     'near_coincident_polys': True,
     'long_run': True,
     'elastic_gas': True,
+    'card_house': False,
+    'arch': False,
+    'light_on_heavy_1000': True,
+    'friction_ramp': True,
+    'overlapping_start': True,
+    'overfilled_box': False,
+    'thin_wall': False,
+    'thin_wall_fast': False,
+    'scale_1e-3_slop': True,
+    'scale_1e3_slop': True,
+    'pyramid_60': False,
 }

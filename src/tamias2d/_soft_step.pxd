@@ -40,9 +40,12 @@ cdef enum:
 # A loaded contact point is stiffened so that its load sinks it at most this
 # fraction of the smaller of the two bodies' sizes (SoftPointSoftness) ...
 cdef const cpFloat SOFT_MAX_LOAD_DEFLECTION = 0.005
-# ... but at most this many times (stiffer, Gauss-Seidel no longer converges
-# where a light body carries a heavy one, and the pair starts to bounce) ...
-cdef const cpFloat SOFT_MAX_STIFFENING = 5.0
+# ... but at most this many times between bodies of alike mass, and down to
+# SOFT_MIN_STIFFENING_CAP as their mass ratio grows (stiffer, Gauss-Seidel
+# no longer converges where a light body carries a heavy one, and the pair
+# starts to bounce) ...
+cdef const cpFloat SOFT_MAX_STIFFENING = 10.0
+cdef const cpFloat SOFT_MIN_STIFFENING_CAP = 5.0
 # ... and the load it is stiffened for falls by at most this factor per step.
 cdef const cpFloat SOFT_LOAD_DECAY = 0.98
 

@@ -29,7 +29,7 @@ step; the substep loops touch only those arrays (and the joints' structs), no
 allocation, no Python except user integrators and joints' callbacks. Graph
 colouring and SIMD lanes can partition these arrays later.
 """
-from libc.math cimport INFINITY, pow, sqrt, cos, sin, fabs, fmin
+from libc.math cimport INFINITY, pow, sqrt, cos, sin, fabs, fmin, fmax
 from tamias2d._config cimport cpFloat, cpBool
 from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, cpArray, cpConstraint,
     cpSoftSettings, cpSoftScratch, TAMIAS_SOLVER_CHIPMUNK, TAMIAS_SOLVER_SOFT,
@@ -307,8 +307,21 @@ cdef inline cpFloat SoftContactSize(cpArbiter *arb) noexcept nogil:
         return sa
     return fmin(sa, sb)
 
+cdef inline cpFloat SoftMaxStiffening(SoftBody *a, SoftBody *b) noexcept nogil:
+    # How much stiffer than the base a loaded contact may become: between
+    # bodies of alike mass (or against an immovable one) a lot; where a
+    # light body carries a heavy one the Gauss-Seidel passes no longer
+    # converge on a stiff contact and the pair starts to bounce, so little.
+    cdef cpFloat lo, hi
+    if a.m_inv == 0.0 or b.m_inv == 0.0:
+        return SOFT_MAX_STIFFENING
+    lo = fmin(a.m_inv, b.m_inv)
+    hi = fmax(a.m_inv, b.m_inv)
+    return fmax(SOFT_MIN_STIFFENING_CAP, SOFT_MAX_STIFFENING * (lo / hi))
+
 cdef inline void SoftPointSoftness(SoftPoint *sp, SoftSoftness *base, cpFloat omega,
-                                   cpFloat load, cpFloat size, SoftContext *ctx) noexcept nogil:
+                                   cpFloat load, cpFloat size, cpFloat maxStiffening,
+                                   SoftContext *ctx) noexcept nogil:
     # A soft contact settles where its bias balances the impulse it leaks:
     # (compliance / normalMass) * impulse = biasRate * depth. Under a load F
     # (impulse F h per substep) it sinks compliance F h / (normalMass
@@ -324,8 +337,8 @@ cdef inline void SoftPointSoftness(SoftPoint *sp, SoftSoftness *base, cpFloat om
     c = s.impulseScale / s.massScale if s.massScale > 0.0 else 0.0
     if load > 0.0 and ctx.maxDeflection > 0.0 and c > 0.0 and size > 0.0:
         need = ctx.maxDeflection * size * sp.normalMass * s.biasRate / (load * ctx.h)
-        if need < c * (1.0 / SOFT_MAX_STIFFENING):
-            need = c * (1.0 / SOFT_MAX_STIFFENING)
+        if need < c / maxStiffening:
+            need = c / maxStiffening
         if need < c:
             c = need
             s.massScale = 1.0 / (1.0 + c)
@@ -348,6 +361,7 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     cdef SoftBody *b
     cdef SoftSoftness soft
     cdef cpFloat nx, ny, rnA, rnB, rtA, rtB, kN, kT, sep, warm, omega, size, load
+    cdef cpFloat maxStiffening
     cdef cpFloat warmCoef = ctx.h / prev_dt if prev_dt != 0.0 else 0.0
     cdef cpFloat loadCoef = 1.0 / prev_dt if prev_dt != 0.0 else 0.0
     if not _reserve(&space.softScratch.contacts, &space.softScratch.contactCap,
@@ -366,6 +380,7 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
         b = &ctx.bodies[sc.ib]
         sc.count = arb.count if arb.count <= 2 else 2
         size = SoftContactSize(arb)
+        maxStiffening = SoftMaxStiffening(a, b)
         nx = arb.n.x
         ny = arb.n.y
         sc.nx = nx
@@ -413,7 +428,7 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
                 load = SOFT_LOAD_DECAY * con.jBias
             if warm == 0.0:
                 load = 0.0
-            SoftPointSoftness(sp, &soft, omega, load, size, ctx)
+            SoftPointSoftness(sp, &soft, omega, load, size, maxStiffening, ctx)
             # Separation now, less the anchors' part, which the solver adds
             # back from the bodies' motion within the step.
             sep = ((sp.rBx - sp.rAx + arb.body_b.p.x - arb.body_a.p.x) * nx

@@ -970,6 +970,33 @@ cdef class Body:
         return WeakKeysView(d)
 
     @property
+    def is_bullet(self):
+        """Continuous collision against dynamic bodies too, in the soft
+        solver (default False; a tamias2d extension, Box2D's ``isBullet``).
+
+        In ``Space.solver = "soft"`` every body is stopped by static and
+        kinematic shapes however fast it moves (its speculative contacts
+        reach as far as it travels in the step). A bullet gets the same
+        against dynamic bodies, at the cost of more contact pairs while it
+        moves fast. The chipmunk solver ignores it.
+
+        >>> import tamias2d
+        >>> b = tamias2d.Body(1, 1)
+        >>> b.is_bullet
+        False
+        >>> b.is_bullet = True
+        >>> b.is_bullet
+        True
+        """
+        return <bint>self._body.isBullet
+
+    @is_bullet.setter
+    def is_bullet(self, value):
+        cdef bint flag = bool(value)
+        tamias_wait_body(&self._body)
+        self._body.isBullet = flag
+
+    @property
     def is_sleeping(self):
         """True while the body sleeps.
 
@@ -1303,6 +1330,7 @@ cdef class Body:
         """
         cdef dict d = pymunk_getstate(self)
         d["special"] += [("is_sleeping", self.is_sleeping),
+                         ("is_bullet", self.is_bullet),
                          ("_velocity_func", self._velocity_func),
                          ("_position_func", self._position_func)]
         return d
@@ -1323,7 +1351,9 @@ cdef class Body:
         pymunk_setstate(self, state)
         for k, v in state["special"]:
             # A sleeping body comes back awake.
-            if k == "_velocity_func" and v is not None:
+            if k == "is_bullet":
+                self.is_bullet = v
+            elif k == "_velocity_func" and v is not None:
                 self.velocity_func = v
             elif k == "_position_func" and v is not None:
                 self.position_func = v

@@ -50,7 +50,7 @@ from tamias2d._spatialindex cimport (cpSpatialIndexFree, cpSpatialIndexEach,
 from tamias2d._bbtree cimport cpBBTreeNew, cpBBTreeSetVelocityFunc, cpBBTreeVelocityFunc
 from tamias2d._spacehash cimport cpSpaceHashNew
 from tamias2d.vector cimport (cpVect, cpBB, cpTransform, cpv, cpvadd, cpvsub, cpvmult,
-    cpvlengthsq, cpvdist, cpfmax, cpBBIntersects, cpBBNewForCircle, cpTransformPoint,
+    cpvlengthsq, cpvlength, cpvdist, cpfmax, cpBBNew, cpBBIntersects, cpBBNewForCircle, cpTransformPoint,
     vec2d_from_cpv, cpv_from_object, cpv_from_object_finite, cptransform_from_object,
     cpbb_from_object)
 from tamias2d.body cimport (Body, cpBodyInit, cpBodySetType, cpBodyActivate,
@@ -112,7 +112,18 @@ cdef void *handlerSetTrans(const void *ptr, void *unused) noexcept nogil:
     return copy
 
 cdef cpBB _shapeGetBB(void *obj) noexcept nogil:
-    return (<cpShape *>obj).bb
+    cdef cpShape *shape = <cpShape *>obj
+    cdef cpSpace *space = shape.space
+    cdef cpBB bb = shape.bb
+    cdef cpFloat m
+    if space == NULL or space.collideMargin == 0.0:
+        return bb
+    # The soft solver pairs shapes up to its speculative distance plus the
+    # step's travel apart (cpSpaceCollideShapes), so the broad phase must
+    # see them that far out too. (The chipmunk solver: margin 0, the box
+    # as it is.)
+    m = space.collideMargin + cpvlength(shape.body.v) * space.curr_dt
+    return cpBBNew(bb.l - m, bb.b - m, bb.r + m, bb.t + m)
 
 # The dynamic tree predicts a shape's motion from its body's velocity.
 cdef cpVect ShapeVelocityFunc(void *obj) noexcept nogil:
