@@ -105,7 +105,7 @@ def test_a_space_that_cannot_step_stops_the_call_before_any_step():
     good.step(0.1)                        # and nothing left locked
 
 
-def test_an_exception_in_a_callback_comes_after_every_space_stepped():
+def test_an_exception_in_a_callback_stops_its_space_and_the_others_run_all_steps():
     spaces = [scenes.circles_on_segment(tamias2d, count=4) for _ in range(4)]
     for _ in range(40):
         for s in spaces:
@@ -119,12 +119,103 @@ def test_an_exception_in_a_callback_comes_after_every_space_stepped():
     with pytest.raises(RuntimeError, match="boom") as info:
         tamias2d.step_spaces(spaces, 1 / 60, threads=2, steps=5)
     assert info.value.space is spaces[2] and info.value.space_index == 2
+    assert info.value.steps_done == 1
+    assert any("spaces[2]" in note and "1 of its 5 steps" in note
+               for note in getattr(info.value, "__notes__", ["spaces[2] 1 of its 5 steps"]))
     for i, (s, r) in enumerate(zip(spaces, refs)):
-        r.step(1 / 60)                    # every space made exactly the first step
-        if i != 2:
-            assert state(s) == state(r)
+        for _ in range(1 if i == 2 else 5):   # the failing space stopped after its first step
+            r.step(1 / 60)
+        assert state(s) == state(r)
     spaces[2].on_collision(post_solve=tamias2d.empty_callback)
     tamias2d.step_spaces(spaces, 1 / 60)  # consistent and steppable
+
+
+def test_two_failing_spaces_raise_the_first_and_name_the_other():
+    spaces = [scenes.circles_on_segment(tamias2d, count=3) for _ in range(5)]
+    for _ in range(40):
+        for s in spaces:
+            s.step(1 / 60)
+
+    def boom(arbiter, space, data):
+        raise KeyError(space.boom)
+
+    for k in (3, 1):
+        spaces[k].boom = k
+        spaces[k].on_collision(pre_solve=boom)
+    with pytest.raises(KeyError) as info:
+        tamias2d.step_spaces(spaces, 1 / 60, threads=2, steps=3)
+    assert info.value.space_index == 1 and info.value.args == (1,)
+    if hasattr(info.value, "__notes__"):
+        assert any("spaces[3] (KeyError)" in note for note in info.value.__notes__)
+    assert all(s.current_time_step == 1 / 60 for s in spaces)
+
+
+def test_python_work_between_steps_runs_on_the_worker_as_in_serial_steps():
+    # Post-step callbacks and removals deferred by a callback happen between
+    # two steps of the same call, as between two calls of Space.step.
+    def drop(space, body, shape):
+        space.remove(body, shape)
+
+    def make():
+        s = scenes.circles_on_segment(tamias2d, count=6)
+        s.log = []
+
+        def begin(arbiter, space, data):
+            for shape in arbiter.shapes:
+                if shape.body.body_type == tamias2d.Body.DYNAMIC and len(space.log) < 3:
+                    space.log.append(round(shape.body.position.x, 9))
+                    space.add_post_step_callback(drop, shape.body, shape)
+
+        s.on_collision(begin=begin)
+        return s
+
+    together = [make() for _ in range(4)]
+    alone = [make() for _ in range(4)]
+    tamias2d.step_spaces(together, 1 / 60, threads=2, steps=90)
+    for s in alone:
+        for _ in range(90):
+            s.step(1 / 60)
+    for a, b in zip(together, alone):
+        assert a.log == b.log and len(a.log) == 3
+        assert len(a.bodies) == len(b.bodies) == 3
+        assert state(a) == state(b)
+
+
+def test_a_mass_made_bad_by_a_callback_stops_that_space_at_the_next_step():
+    spaces = [scenes.circles_on_segment(tamias2d, count=3) for _ in range(3)]
+
+    def zero_mass(arbiter, space, data):
+        for shape in arbiter.shapes:
+            if shape.body.body_type == tamias2d.Body.DYNAMIC:
+                shape.body.moment = 0     # a later step must refuse it
+                return
+
+    spaces[1].on_collision(begin=zero_mass)
+    with pytest.raises(IllegalBody) as info:
+        tamias2d.step_spaces(spaces, 1 / 60, threads=2, steps=120)
+    assert info.value.space_index == 1
+    done = info.value.steps_done
+    assert 0 < done < 120 and spaces[1].current_time_step == 1 / 60
+    assert spaces[0].current_time_step == spaces[2].current_time_step == 1 / 60
+
+
+def test_out_of_memory_is_reported_for_the_space_that_ran_out():
+    # Empty spaces stepped a few times allocate nothing more; the first step
+    # of a scene with contacts does. The C flag is per thread (so is the
+    # failure hook: one thread here); it must come out as the MemoryError of
+    # the space that ran out, not of the first space finished.
+    from tamias2d._testing import _set_alloc_failure
+    quiet = [tamias2d.Space() for _ in range(2)]
+    tamias2d.step_spaces(quiet, 1 / 60, threads=1, steps=10)
+    spaces = quiet + [scenes.pyramid(tamias2d, rows=4)]
+    _set_alloc_failure(0, 1_000_000)
+    try:
+        with pytest.raises(MemoryError) as info:
+            tamias2d.step_spaces(spaces, 1 / 60, threads=1)
+    finally:
+        _set_alloc_failure(-1)
+    assert info.value.space_index == 2
+    tamias2d.step_spaces(spaces, 1 / 60, threads=2)   # no flag left behind
 
 
 def test_a_space_inside_its_own_step_is_refused():
