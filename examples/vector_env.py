@@ -196,11 +196,11 @@ class PushVectorEnv(_VectorBase):
             active = [self.spaces[i] for i in keep]
             rows = np.stack([2 * keep, 2 * keep + 1], axis=1).ravel()
             tamias2d.batch.set_spaces_bodies(active, self._velocity[rows], "velocity")
-            tamias2d.step_spaces(active, DT, threads=self.threads, steps=self.frame_skip)
+            self._physics(active)
             self._reset_envs(np.flatnonzero(resetting))
         else:
             tamias2d.batch.set_spaces_bodies(self.spaces, self._velocity, "velocity")
-            tamias2d.step_spaces(self.spaces, DT, threads=self.threads, steps=self.frame_skip)
+            self._physics(self.spaces)
         self._read()
         distance = self._block_distance()
         terminated = distance < GOAL_TOLERANCE
@@ -250,6 +250,9 @@ class PushVectorEnv(_VectorBase):
         self._rows[rows] = tamias2d.batch.get_spaces_bodies(chosen, FIELDS)[0]
         d = self._rows[2 * which + 1, 0:2] - self._goal[which]
         self._distance[which] = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
+
+    def _physics(self, spaces):
+        tamias2d.step_spaces(spaces, DT, threads=self.threads, steps=self.frame_skip)
 
     def _read(self):
         tamias2d.batch.get_spaces_bodies(self.spaces, FIELDS, out=self._rows)

@@ -26,3 +26,5 @@ from .constraints import (Constraint, PinJoint, SlideJoint, PivotJoint, GrooveJo
     DampedSpring, DampedRotarySpring, RotaryLimitJoint, RatchetJoint, GearJoint, SimpleMotor)
 from ._pymunk_hook import install_as_pymunk
 from ._step_spaces import step_spaces
+from . import sweeps
+from .sweeps import sweep

@@ -977,7 +977,7 @@ def _step_spaces_c(spaces, double dt, long steps):
     >>> s.add(b, tamias2d.Circle(b, 1))
     >>> _step_spaces_c([s], 0.1, 3)
     >>> round(b.position.y, 6)
-    -0.6
+    -0.3
     """
     cdef list items = list(spaces)
     cdef Py_ssize_t n = len(items), i
