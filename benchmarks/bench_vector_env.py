@@ -105,7 +105,40 @@ def overhead(n, repeat):
             per = 1e6 / (calls * steps * n)
             s, c = statistics.median(ts) * per, statistics.median(tc) * per
             rows.append((label, steps, s, c))
-    return rows
+    return rows, batch_io(env, repeat)
+
+
+def batch_io(env, repeat, calls=500):
+    """Microseconds per call: reading and writing the bodies of all the
+    scenes with the across-spaces batch calls, and with a loop of the
+    one-space calls."""
+    import tamias2d.batch as B
+    spaces, rows = env.spaces, env._rows
+    vel = np.ascontiguousarray(rows[:, 3:5])
+    offsets = B.get_spaces_bodies(spaces, V.FIELDS)[1]
+
+    def loop_get():
+        for i, s in enumerate(spaces):
+            B.get_bodies(s, V.FIELDS, rows[offsets[i]:offsets[i + 1]])
+
+    def loop_set():
+        for i, s in enumerate(spaces):
+            B.set_bodies(s, vel[offsets[i]:offsets[i + 1]], "velocity")
+
+    cases = {"get_spaces_bodies": lambda: B.get_spaces_bodies(spaces, V.FIELDS, out=rows),
+             "loop of get_bodies": loop_get,
+             "set_spaces_bodies": lambda: B.set_spaces_bodies(spaces, vel, "velocity"),
+             "loop of set_bodies": loop_set}
+    out = {}
+    for name, fn in cases.items():
+        ts = []
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            for _ in range(calls):
+                fn()
+            ts.append(time.perf_counter() - t0)
+        out[name] = statistics.median(ts) / calls * 1e6
+    return out
 
 
 def main(argv=None):
@@ -128,7 +161,7 @@ def main(argv=None):
             times[name].append(run_env(env, acts))
     for env in envs.values():
         env.close()
-    rows = overhead(n, args.repeat)
+    rows, io = overhead(n, args.repeat)
     load1 = os.getloadavg()
     work = n * args.frames
     print(f"{n} push scenes x {args.frames} env steps ({V.FRAME_SKIP} physics steps each), "
@@ -144,6 +177,9 @@ def main(argv=None):
     for label, steps, s, c in rows:
         print(f"  {label:12s} steps={steps}:  step_spaces {s:6.2f}   C loop {c:6.2f}   "
               f"overhead {s - c:5.2f}")
+    print(f"reading and writing the bodies of the {n} scenes ({2 * n} bodies), us per call:")
+    for name, us in io.items():
+        print(f"  {name:20s} {us:8.1f}")
 
 
 if __name__ == "__main__":

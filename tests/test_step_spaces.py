@@ -263,3 +263,77 @@ def test_callbacks_may_change_their_own_space_on_any_thread():
             s.step(1 / 60)
     assert all(state(a) == state(b) for a, b in zip(together, alone))
     assert calls   # the callbacks ran (and changed bodies) on the workers
+
+
+def test_many_quick_calls_with_changing_thread_counts():
+    # Thousands of short calls: workers that wake late (or not at all), join
+    # the next call or find it over; every call must still step each space
+    # exactly once per step, on no more threads than it asked for.
+    seen_threads = set()
+    import threading
+
+    def note_thread(arbiter, space, data):
+        seen_threads.add((space.call_threads, threading.get_ident()))
+
+    def make():
+        s = scenes.circles_on_segment(tamias2d, count=2)
+        s.call_threads = 0
+        return s
+
+    together = [make() for _ in range(6)]
+    alone = [make() for _ in range(6)]
+    together[0].on_collision(pre_solve=note_thread)
+    alone[0].on_collision(pre_solve=note_thread)
+    counts = [1, 2, 3, 2, 1, 4]
+    for k in range(3000):
+        threads = counts[k % len(counts)]
+        for s in together:
+            s.call_threads = threads
+        tamias2d.step_spaces(together, 1 / 240, threads=threads, steps=1 + k % 3)
+    for k in range(3000):
+        for s in alone:
+            for _ in range(1 + k % 3):
+                s.step(1 / 240)
+    assert all(state(a) == state(b) for a, b in zip(together, alone))
+    main = threading.get_ident()
+    assert {t for n, t in seen_threads if n == 1} <= {main}   # threads=1: the caller only
+
+
+@isolated(timeout=60)   # a regression here is a deadlock
+def test_a_callback_may_step_other_spaces_with_step_spaces():
+    # The pool is busy with the outer call: the inner one runs on the
+    # callback's own thread, whichever thread that is.
+    inner = [[scenes.circles_on_segment(tamias2d, count=2) for _ in range(3)] for _ in range(4)]
+    inner_alone = [[scenes.circles_on_segment(tamias2d, count=2) for _ in range(3)]
+                   for _ in range(4)]
+
+    def make(k):
+        s = scenes.circles_on_segment(tamias2d, count=3)
+        s.k = k
+
+        def post(arbiter, space, data):
+            tamias2d.step_spaces(inner[space.k], 1 / 60, threads=2)
+
+        s.on_collision(post_solve=post)
+        return s
+
+    outer = [make(k) for k in range(4)]
+    tamias2d.step_spaces(outer, 1 / 60, threads=2, steps=120)
+    # The reference: the outer spaces alone, counting their post-solve
+    # calls; then as many steps of each inner group.
+    ref = [make(k) for k in range(4)]
+    counted = [0] * 4
+
+    def count(arbiter, space, data):
+        counted[space.k] += 1
+
+    for s in ref:
+        s.on_collision(post_solve=count)
+        for _ in range(120):
+            s.step(1 / 60)
+    for k in range(4):
+        assert counted[k] > 0
+        for _ in range(counted[k]):
+            tamias2d.step_spaces(inner_alone[k], 1 / 60, threads=1)
+        assert [state(a) for a in inner[k]] == [state(b) for b in inner_alone[k]]
+    assert [state(a) for a in outer] == [state(b) for b in ref]

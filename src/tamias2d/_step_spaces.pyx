@@ -150,15 +150,15 @@ cdef struct Job:
     long steps
     long next                    # the next space to take (atomic)
 
-cdef Job _job
+cdef Job *_job = NULL                          # the pool's call (its Job lives in _step_all)
 cdef int _started = 0                          # workers running
 cdef PyThread_type_lock _go[MAX_WORKERS]       # released to wake worker k
 cdef PyThread_type_lock _finished = NULL       # released by the last worker out, if asked
-cdef volatile long _open = 0                   # 1 while _job may be worked on
+cdef volatile long _open = 0                   # 1 while *_job may be worked on
 cdef volatile long _in_flight = 0              # workers between their check of _open and leaving
 cdef volatile long _caller_waits = 0           # the caller sleeps on _finished
 cdef volatile long _seats = 0                  # workers the open call may still take
-cdef object _pool_lock = threading.Lock()      # one step_spaces call at a time
+cdef object _pool_lock = threading.Lock()      # held by the call the pool serves
 cdef long _pool_pid = -1                       # the process whose workers these are
 
 
@@ -220,7 +220,7 @@ cdef void _join_job() noexcept nogil:
     # takes no more workers than it asked for (threads - 1).
     tamias_add(&_in_flight, 1)
     if tamias_load(&_open) and tamias_add(&_seats, -1) >= 0:
-        _work(&_job)
+        _work(_job)
     if tamias_add(&_in_flight, -1) == 0 and tamias_load(&_caller_waits):
         PyThread_release_lock(_finished)
 
@@ -252,18 +252,20 @@ cdef int _ensure_workers(int n) except -1:
     return 0
 
 
-cdef int _run_job(int helpers) except -1:
+cdef int _run_job(Job *job, int helpers) except -1:
     # The caller works too, so `helpers` workers make helpers + 1 threads.
     # It never waits for a worker that has not started: once every space is
     # taken it closes the call and waits only for the workers inside it.
     cdef int k
     cdef long long until
+    global _job
+    _job = job
     with nogil:
         tamias_store(&_seats, helpers)
         tamias_store(&_open, 1)
         for k in range(helpers):
             PyThread_release_lock(_go[k])
-        _work(&_job)
+        _work(job)
         tamias_store(&_open, 0)
         if tamias_load(&_in_flight) != 0:
             until = tamias_now_ns() + CALLER_SPIN_NS
@@ -296,6 +298,10 @@ def step_spaces(spaces, dt, *, threads=None, steps=1):
     `steps` times ends, for any number of threads. A thread takes one space
     and runs all its steps, then takes the next, so the threads meet once
     per call and ``steps=k`` costs less than k calls.
+
+    The worker threads serve one call at a time: a call made while they
+    serve another (from another thread, or from a callback of a space being
+    stepped) runs on its calling thread alone.
 
     Python callbacks (collision handlers, body or joint functions, post-step
     callbacks) work and run on the thread stepping their space, which may not
@@ -375,9 +381,17 @@ def step_spaces(spaces, dt, *, threads=None, steps=1):
         for i in range(n):
             cspaces[i] = &(<Space>spaces[i])._space
             owners[i] = <PyObject *>spaces[i]
-        with _pool_lock:
-            _ensure_workers(helpers)
-            _step_all(spaces, cspaces, owners, slots, n, cdt, nsteps, helpers)
+        # While the pool serves one call, another (from another thread, or
+        # from a callback of a space being stepped, which must not wait for
+        # the call it is part of) runs on its own thread alone.
+        if helpers > 0 and _pool_lock.acquire(blocking=False):
+            try:
+                _ensure_workers(helpers)
+                _step_all(spaces, cspaces, owners, slots, n, cdt, nsteps, helpers)
+            finally:
+                _pool_lock.release()
+        else:
+            _step_all(spaces, cspaces, owners, slots, n, cdt, nsteps, 0)
     finally:
         free(cspaces)
         free(owners)
@@ -399,16 +413,20 @@ cdef int _step_all(list spaces, cpSpace **cspaces, PyObject **owners, Slot *slot
             _name_space(exc, spaces[i], i, 0, "before any space stepped")
             raise
     cdef list errors = [None] * n
-    _job.spaces = cspaces
-    _job.owners = owners
-    _job.slots = slots
-    _job.errors = <PyObject *>errors
-    _job.dt = dt
-    _job.count = n
-    _job.steps = steps
-    _job.next = 0
-    _run_job(helpers)
-    _job.errors = NULL
+    cdef Job job
+    job.spaces = cspaces
+    job.owners = owners
+    job.slots = slots
+    job.errors = <PyObject *>errors
+    job.dt = dt
+    job.count = n
+    job.steps = steps
+    job.next = 0
+    if helpers > 0:
+        _run_job(&job, helpers)
+    else:
+        with nogil:
+            _work(&job)
     failed = []
     for i in range(n):
         slot = &slots[i]
