@@ -115,6 +115,17 @@ cdef long long WORKER_SPIN_NS = 200000
 cdef long long CALLER_SPIN_NS = 100000
 
 
+def _set_spin(worker_ns, caller_ns):
+    """Set the two polling times in nanoseconds (for benchmarks); returns
+    the old ones. 0 blocks at once."""
+    global WORKER_SPIN_NS, CALLER_SPIN_NS
+    old = (WORKER_SPIN_NS, CALLER_SPIN_NS)
+    if worker_ns < 0 or caller_ns < 0:
+        raise ValueError("polling times must be >= 0")
+    WORKER_SPIN_NS, CALLER_SPIN_NS = worker_ns, caller_ns
+    return old
+
+
 cdef void _take_lock(PyThread_type_lock lock, long long spin_ns) noexcept nogil:
     # Taking a free lock without blocking costs no system call.
     cdef long long until
