@@ -26,6 +26,8 @@ from .constraints import (Constraint, PinJoint, SlideJoint, PivotJoint, GrooveJo
     DampedSpring, DampedRotarySpring, RotaryLimitJoint, RatchetJoint, GearJoint, SimpleMotor)
 from ._pymunk_hook import install_as_pymunk
 from ._step_spaces import step_spaces
+from . import sweeps
+from .sweeps import sweep
 
 # The package's public names (`from tamias2d import *`), the documented API of
 # docs/api/; the modules batch, constraints, errors, ... are reached as
@@ -43,5 +45,5 @@ __all__ = [
     "Constraint", "PinJoint", "SlideJoint", "PivotJoint", "GrooveJoint", "DampedSpring",
     "DampedRotarySpring", "RotaryLimitJoint", "RatchetJoint", "GearJoint", "SimpleMotor",
     "SpaceDebugDrawOptions",
-    "install_as_pymunk", "step_spaces",
+    "install_as_pymunk", "step_spaces", "sweep",
 ]

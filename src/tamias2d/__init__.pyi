@@ -2,6 +2,7 @@
 from . import batch as batch
 from . import constraints as constraints
 from . import errors as errors
+from . import sweeps as sweeps
 from .arbiter import Arbiter as Arbiter
 from .body import Body as Body
 from .collision import ContactPoint as ContactPoint
@@ -36,6 +37,7 @@ from .shape import moment_for_segment as moment_for_segment
 from .space import Space as Space
 from .space import empty_callback as empty_callback
 from .space_debug_draw_options import SpaceDebugDrawOptions as SpaceDebugDrawOptions
+from .sweeps import sweep as sweep
 from .vector import BB as BB
 from .vector import Transform as Transform
 from .vector import Vec2d as Vec2d
@@ -53,7 +55,7 @@ __all__ = [
     "Constraint", "PinJoint", "SlideJoint", "PivotJoint", "GrooveJoint", "DampedSpring",
     "DampedRotarySpring", "RotaryLimitJoint", "RatchetJoint", "GearJoint", "SimpleMotor",
     "SpaceDebugDrawOptions",
-    "install_as_pymunk", "step_spaces",
+    "install_as_pymunk", "step_spaces", "sweep",
 ]
 
 version: str

@@ -18,7 +18,8 @@ module each section exercises:
   ``_new_shape_summary``;
 - ``collision``: ``_bias_velocity``, ``_collide``, ``_collision_table_call``,
   ``_collide_loop``;
-- ``body``: ``_run_velocity_func``, ``_run_position_func``.
+- ``body``: ``_run_velocity_func``, ``_run_position_func``;
+- ``_step_spaces``: ``_step_spaces_c``, the bare C loop of steps.
 
 The inline C functions called here are compiled into this module with the
 same flags as the engine modules, so they give the engine's bits.
@@ -28,7 +29,7 @@ from libc.stdint cimport uintptr_t, uint32_t
 from cpython.ref cimport PyObject
 
 from tamias2d._config cimport cpFloat, cpHashValue, cpCollisionID, cpBool, CP_MAX_CONTACTS_PER_ARBITER
-from tamias2d._structs cimport (cpArray, cpHashSet, cpHashSetBin, cpSpatialIndex, cpShape,
+from tamias2d._structs cimport (cpArray, cpHashSet, cpHashSetBin, cpSpatialIndex, cpShape, cpSpace,
     cpShapeFilter, cpContact, cpCollisionInfo, CP_NUM_SHAPES)
 from tamias2d.vector cimport (cpVect, cpBB, cpTransform, cpMat2x2, cpfmax, cpfmin, cpfabs,
     cpfclamp, cpfclamp01, cpflerp, cpflerpconst, cpv, cpvzero, VECT_ERR, CP_PI, cpveql,
@@ -57,6 +58,7 @@ from tamias2d._bbtree cimport (cpBBTree, Node, Pair, cpBBTreeNew, cpBBTreeSetVel
     cpBBTreeOptimize, cpBBTreeClass)
 from tamias2d._spacehash cimport cpSpaceHashNew
 from tamias2d.body cimport Body
+from tamias2d.space cimport Space, tamias_space_step
 from tamias2d.shape cimport (_VertBuffer, _verts_arg, cpShapeFilterReject, cpShapeUpdate,
     cpShapeFree, cpConvexHull, cpMomentForBox2, cpCircleShapeClass, cpSegmentShapeClass,
     cpCircleShapeNew, cpSegmentShapeNew, cpPolyShapeNew, cpPolyShapeNewRaw, cpBoxShapeNew,
@@ -957,3 +959,39 @@ def _run_position_func(Body body not None, double dt):
     Vec2d(0.5, 0.0)
     """
     body._body.position_func(&body._body, dt)
+
+
+# -- _step_spaces: the bare C loop that step_spaces is measured against ------------------
+def _step_spaces_c(spaces, double dt, long steps):
+    """Step every space `steps` times (each space's steps in a row) by
+    calling the C step in one loop without the GIL, on this thread: none of
+    the checks of ``Space.step``, no thread guard, no error reports, nothing
+    deferred by a callback is run. For benchmarks/bench_vector_env.py (the
+    per-space overhead of ``step_spaces``) on plain scenes only.
+
+    >>> import tamias2d
+    >>> from tamias2d._testing import _step_spaces_c
+    >>> s = tamias2d.Space()
+    >>> s.gravity = 0, -10
+    >>> b = tamias2d.Body(1, 1)
+    >>> s.add(b, tamias2d.Circle(b, 1))
+    >>> _step_spaces_c([s], 0.1, 3)
+    >>> round(b.position.y, 6)
+    -0.3
+    """
+    cdef list items = list(spaces)
+    cdef Py_ssize_t n = len(items), i
+    cdef long k
+    for s in items:
+        if not isinstance(s, Space) or (<Space>s)._locked or (<Space>s)._space.stepThread != 0:
+            raise TypeError("spaces must be tamias2d.Space objects, none locked or stepping")
+    cdef cpSpace **cs = <cpSpace **>malloc(n * sizeof(cpSpace *) + 1)
+    if cs == NULL:
+        raise MemoryError()
+    for i in range(n):
+        cs[i] = &(<Space>items[i])._space
+    with nogil:
+        for i in range(n):
+            for k in range(steps):
+                tamias_space_step(cs[i], dt)
+    free(cs)

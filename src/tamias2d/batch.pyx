@@ -57,6 +57,7 @@ True
 [5.0, 6.0, 7.0]
 """
 from cpython.dict cimport PyDict_Next
+from cpython.pythread cimport PyThread_get_thread_ident
 from cpython.object cimport PyObject
 from libc.stdint cimport uintptr_t, int64_t, uint64_t
 from libc.stdlib cimport malloc, calloc, realloc, free
@@ -653,6 +654,42 @@ def get_arbiters(space, fields=None):
 
 # -- many spaces at once (with tamias2d.step_spaces) ------------------------------------------
 
+cdef bint _others_stepping(list spaces):
+    # Whether another thread steps one of `spaces` (a callback of a step
+    # itself may read its own space).
+    cdef unsigned long me = PyThread_get_thread_ident()
+    cdef Space sp
+    for s in spaces:
+        sp = <Space>s
+        if sp._space.stepThread != 0 and sp._space.stepThread != me:
+            return True
+    return False
+
+
+cdef int _wait_spaces(list spaces) except -1:
+    # Waiting for one space lets the GIL go, so another may start a step
+    # meanwhile: look again until no space is stepped by another thread.
+    cdef Space sp
+    while _others_stepping(spaces):
+        for s in spaces:
+            sp = <Space>s
+            tamias_wait_for_step(&sp._space)
+    return 0
+
+
+cdef object _stack_offsets(list spaces):
+    np = _np()
+    cdef Py_ssize_t i, m = len(spaces)
+    offsets = np.empty(m + 1, dtype=np.int64)
+    cdef int64_t[::1] off = offsets
+    cdef int64_t total = 0
+    off[0] = 0
+    for i in range(m):
+        total += len((<Space>spaces[i])._bodies)
+        off[i + 1] = total
+    return offsets
+
+
 def get_spaces_bodies(spaces, fields, out=None):
     """The bodies of every space of `spaces`, stacked: a float64 array of
     shape (total bodies, columns), the bodies of ``spaces[0]`` first (each
@@ -660,6 +697,8 @@ def get_spaces_bodies(spaces, fields, out=None):
     ``len(spaces) + 1`` entries: the bodies of ``spaces[i]`` are rows
     ``offsets[i]:offsets[i + 1]``. With :func:`tamias2d.step_spaces` an RL
     loop is "write actions, step all, read observations" in three calls.
+    One C loop reads every body; pass `out` (a C-contiguous float64 array of
+    the right shape) to fill it instead of a new array.
 
     >>> import tamias2d, tamias2d.batch
     >>> spaces = [tamias2d.Space() for _ in range(3)]
@@ -673,26 +712,52 @@ def get_spaces_bodies(spaces, fields, out=None):
     ([0, 1, 3, 6], [[2.0, 0.0], [2.0, 1.0], [2.0, 2.0]])
     """
     np = _np()
-    spaces = [_space_arg(s) for s in spaces]
+    cdef list items = [_space_arg(s) for s in spaces]
     cdef tuple codes = _parse_fields(fields)
     cdef int width = _width(codes)
-    counts = [len((<Space>s)._bodies) for s in spaces]
-    offsets = np.zeros(len(spaces) + 1, dtype=np.int64)
-    np.cumsum(counts, out=offsets[1:])
-    total = int(offsets[-1])
-    if out is None:
-        out = np.empty((total, width), dtype=np.float64)
-    elif not isinstance(out, np.ndarray) or out.shape != (total, width):
-        raise ValueError(f"out must be a float64 array of shape {(total, width)}")
-    for i, s in enumerate(spaces):
-        get_bodies(s, fields, out[offsets[i]:offsets[i + 1]])
-    return out, offsets
+    cdef int ncodes = len(codes)
+    cdef int code[MAX_FIELDS]
+    cdef int k
+    for k in range(ncodes):
+        code[k] = codes[k]
+    while True:
+        _wait_spaces(items)
+        offsets = _stack_offsets(items)
+        total = int(offsets[-1])
+        if out is None:
+            result = np.empty((total, width), dtype=np.float64)
+        else:
+            if not isinstance(out, np.ndarray) or out.dtype != np.float64:
+                raise TypeError("out must be a float64 numpy array")
+            if out.shape != (total, width):
+                raise ValueError(f"out has shape {out.shape}; {(total, width)} is needed")
+            if not out.flags.c_contiguous or not out.flags.writeable:
+                raise ValueError("out must be C-contiguous and writeable")
+            result = out
+        if not _others_stepping(items):
+            break   # and none can start: this thread keeps the GIL to the end
+    if total == 0:
+        return result, offsets
+    cdef double[:, ::1] view = result
+    cdef Py_ssize_t pos, row = 0
+    cdef PyObject *key
+    cdef PyObject *value
+    cdef Space sp
+    for s in items:
+        sp = <Space>s
+        pos = 0
+        while PyDict_Next(sp._bodies, &pos, &key, &value):
+            _read_body(&(<Body>key)._body, code, ncodes, &view[row, 0])
+            row += 1
+    return result, offsets
 
 
 def set_spaces_bodies(spaces, values, fields):
     """Write the stacked rows of :func:`get_spaces_bodies` back: ``values``
-    has one row per body of every space, in the same order. Every value is
-    checked before any body changes.
+    has one row per body of every space, in the same order (shape (n,) is
+    accepted for a single one-column field). One C loop writes every body,
+    through the C functions of the Body setters; every value is checked
+    before any body changes.
 
     >>> import tamias2d, tamias2d.batch
     >>> spaces = [tamias2d.Space() for _ in range(2)]
@@ -703,22 +768,46 @@ def set_spaces_bodies(spaces, values, fields):
     [Vec2d(1.0, 2.0), Vec2d(3.0, 4.0)]
     """
     np = _np()
-    spaces = [_space_arg(s) for s in spaces]
+    cdef list items = [_space_arg(s) for s in spaces]
     cdef tuple codes = _parse_fields(fields)
     cdef int width = _width(codes)
-    arr = np.ascontiguousarray(np.asarray(values, dtype=np.float64))
+    cdef int ncodes = len(codes)
+    cdef int code[MAX_FIELDS]
+    cdef int k
+    for k in range(ncodes):
+        code[k] = codes[k]
+    arr = np.asarray(values)
+    if arr.dtype.kind not in "biuf":
+        raise TypeError(f"values must be numbers, not an array of dtype {arr.dtype}")
+    arr = np.ascontiguousarray(arr, dtype=np.float64)
     if arr.ndim == 1 and width == 1:
         arr = arr.reshape((arr.shape[0], 1))
-    counts = [len((<Space>s)._bodies) for s in spaces]
-    total = sum(counts)
-    if arr.shape != (total, width):
-        raise ValueError(f"values have shape {arr.shape}; {total} bodies need {(total, width)}")
     if not np.isfinite(arr).all():
-        raise IllegalBody("values must be finite; no body was changed")
-    start = 0
-    for s, n in zip(spaces, counts):
-        set_bodies(s, arr[start:start + n], fields)
-        start += n
+        bad = np.argwhere(~np.isfinite(arr))[0] if arr.ndim == 2 else None
+        where = f"values[{bad[0]}, {bad[1]}]" if bad is not None else "values"
+        raise IllegalBody(f"{where} must be finite; no body was changed")
+    while True:
+        _wait_spaces(items)
+        total = int(_stack_offsets(items)[-1])
+        if arr.shape != (total, width):
+            raise ValueError(f"values have shape {arr.shape}; fields "
+                             f"{[_FIELD_NAMES[c] for c in codes]} of {total} bodies need "
+                             f"{(total, width)}")
+        if not _others_stepping(items):
+            break
+    if total == 0:
+        return
+    cdef const double[:, ::1] view = arr
+    cdef Py_ssize_t pos, row = 0
+    cdef PyObject *key
+    cdef PyObject *value
+    cdef Space sp
+    for s in items:
+        sp = <Space>s
+        pos = 0
+        while PyDict_Next(sp._bodies, &pos, &key, &value):
+            _write_body(&(<Body>key)._body, code, ncodes, &view[row, 0])
+            row += 1
 
 
 # -- pymunk's batch API ------------------------------------------------------------------

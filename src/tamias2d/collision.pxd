@@ -56,6 +56,21 @@ cdef enum:
 
 # Read and clear this thread's flags (no GIL needed).
 cdef unsigned int cpCollisionTakeFlags() noexcept nogil
+# Read this thread's flags, leaving them set.
+cdef unsigned int cpCollisionPeekFlags() noexcept nogil
+
+# A thread's flags with the iteration counts of its warnings. step_spaces
+# takes them from the worker thread that stepped a space and puts them into
+# the thread that checks that space's step (the flags are per thread).
+cdef struct CollisionDiagnostics:
+    unsigned int flags
+    int gjk_iter
+    int epa_iter
+
+# Read and clear all of this thread's diagnostics.
+cdef CollisionDiagnostics cpCollisionTakeDiagnostics() noexcept nogil
+# Merge `d` into this thread's diagnostics.
+cdef void cpCollisionPutDiagnostics(CollisionDiagnostics d) noexcept nogil
 # Read and clear the flags, then raise CollisionError / CollisionContactOverflow
 # or warn HighIterWarning as they say. Returns 0, or -1 with an exception set.
 cdef int collision_check_flags() except -1

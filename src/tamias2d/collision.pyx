@@ -86,6 +86,28 @@ cdef unsigned int cpCollisionTakeFlags() noexcept nogil:
     tamias_collision_flags = 0
     return flags
 
+cdef unsigned int cpCollisionPeekFlags() noexcept nogil:
+    return tamias_collision_flags
+
+cdef CollisionDiagnostics cpCollisionTakeDiagnostics() noexcept nogil:
+    global tamias_collision_flags, tamias_collision_gjk_iter, tamias_collision_epa_iter
+    cdef CollisionDiagnostics d
+    d.flags = tamias_collision_flags
+    d.gjk_iter = tamias_collision_gjk_iter
+    d.epa_iter = tamias_collision_epa_iter
+    tamias_collision_flags = 0
+    tamias_collision_gjk_iter = 0
+    tamias_collision_epa_iter = 0
+    return d
+
+cdef void cpCollisionPutDiagnostics(CollisionDiagnostics d) noexcept nogil:
+    global tamias_collision_flags, tamias_collision_gjk_iter, tamias_collision_epa_iter
+    tamias_collision_flags |= d.flags
+    if d.gjk_iter > tamias_collision_gjk_iter:
+        tamias_collision_gjk_iter = d.gjk_iter
+    if d.epa_iter > tamias_collision_epa_iter:
+        tamias_collision_epa_iter = d.epa_iter
+
 cdef int collision_check_flags() except -1:
     global tamias_collision_gjk_iter, tamias_collision_epa_iter
     cdef unsigned int flags = cpCollisionTakeFlags()

@@ -221,6 +221,8 @@ cdef void tamias_constraint_scale_impulse(cpConstraint *c, cpFloat factor) noexc
 # rotary joint between two bodies that cannot rotate; or, with sleeping on, a
 # dynamic body of another space. Called before a step.
 cdef int tamias_check_constraints(cpSpace *space) except -1
+# The same test without the GIL: 1 when tamias_check_constraints would pass.
+cdef bint tamias_constraints_ok(cpSpace *space) noexcept nogil
 # The joints-across-spaces rule, checked by Space.add: a joint may be in a
 # space only if each of its bodies is in that space or in none (a body in no
 # space whose shapes were left in another space counts as of that space).

@@ -842,6 +842,14 @@ cdef int _constraint_problem(cpSpace *space, cpConstraint *c) noexcept nogil:
         return _NO_ROTATION
     return _OK
 
+cdef bint tamias_constraints_ok(cpSpace *space) noexcept nogil:
+    cdef cpArray *arr = space.constraints
+    cdef int i
+    for i in range(arr.num):
+        if _constraint_problem(space, <cpConstraint *>arr.arr[i]) != _OK:
+            return False
+    return True
+
 cdef int tamias_check_constraints(cpSpace *space) except -1:
     cdef cpArray *arr = space.constraints
     cdef int i, problem = _OK

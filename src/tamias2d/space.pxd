@@ -90,4 +90,5 @@ cdef class Space:
     cdef int _step_begin(self) except -1
     cdef void _step_abort(self) noexcept
     cdef int _step_finish(self, cpBody *bad, double dt) except -1
+    cdef bint _quiet_between_steps(self, cpBody *bad) noexcept nogil
     cdef _debug_draw(self, options)

@@ -19,6 +19,11 @@ from libc.string cimport memcpy
 from libc.stdint cimport uintptr_t
 from cpython.ref cimport PyObject
 
+cdef extern from "Python.h":
+    # A macro reading the dict's count; used without the GIL only on dicts
+    # that no other thread can change at the time.
+    Py_ssize_t PyDict_GET_SIZE(PyObject *d) nogil
+
 import copyreg
 import math
 import platform
@@ -42,7 +47,7 @@ from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact,
 from tamias2d._containers cimport (cpcalloc, cprealloc, cpfree, cpArrayNew, cpArrayFree, cpArrayPush,
     cpArrayPop, cpArrayDeleteObj, cpArrayFreeEach, cpArrayContains, cpHashSetNew,
     cpHashSetFree, cpHashSetInsert, cpHashSetRemove, cpHashSetFind, cpHashSetEach,
-    cpHashSetFilter, cpTakeOutOfMemory)
+    cpHashSetFilter, cpTakeOutOfMemory, cpOutOfMemory)
 from tamias2d._spatialindex cimport (cpSpatialIndexFree, cpSpatialIndexEach,
     cpSpatialIndexInsert, cpSpatialIndexRemove, cpSpatialIndexReindex,
     cpSpatialIndexReindexObject, cpSpatialIndexReindexQuery, cpSpatialIndexQuery,
@@ -59,7 +64,7 @@ from tamias2d.body cimport (Body, cpBodyInit, cpBodySetType, cpBodyActivate,
 from tamias2d.shape cimport (Shape, cpShapeUpdate, cpShapeCacheBB, cpShapeFilterReject,
     cpShapePointQuery, cpShapeSegmentQuery)
 from tamias2d.collision cimport (cpCollide, cpShapesCollide, collision_check_flags,
-    contact_point_set_from_cp)
+    contact_point_set_from_cp, cpCollisionPeekFlags)
 from tamias2d.arbiter cimport (Arbiter, arbiter_wrap, cpArbiterInit, cpArbiterUpdate,
     cpArbiterPreStep, cpArbiterApplyCachedImpulse, cpArbiterApplyImpulse,
     cpArbiterUnthread, cpCollisionHandlerDoNothing, cpCollisionDoNothing,
@@ -68,7 +73,8 @@ from tamias2d.body cimport cpBodyRemoveConstraint
 from tamias2d._pickle cimport snapshot_module as _snapshot
 from tamias2d.constraints cimport (Constraint, tamias_constraint_detach,
     tamias_space_detach_constraints, tamias_check_constraints, tamias_constraint_debug_draw,
-    tamias_constraint_clear_impulse, tamias_check_joint_space, tamias_check_body_joints)
+    tamias_constraint_clear_impulse, tamias_check_joint_space, tamias_check_body_joints,
+    tamias_constraints_ok)
 
 from tamias2d.shape import PointQueryInfo, SegmentQueryInfo, ShapeQueryInfo
 from tamias2d.errors import (IllegalBody, IllegalShape, SpaceLocked, AlreadyInSpace,
@@ -765,6 +771,19 @@ cdef double _soft_nonneg(object value, str what) except? -1.0:
     if not (isfinite(x) and x >= 0.0):
         raise ValueError(f"{what} must be a finite number >= 0, not {value!r}")
     return x
+
+
+# The first dynamic body of `bodies` that a step must refuse (a mass not in
+# (0, inf), a moment not > 0), or NULL.
+cdef cpBody *_firstBadMassBody(cpArray *bodies) noexcept nogil:
+    cdef cpBody *body
+    cdef int i
+    for i in range(bodies.num):
+        body = <cpBody *>bodies.arr[i]
+        if cpBodyGetType(body) == CP_BODY_TYPE_DYNAMIC and not (
+                body.m > 0.0 and body.m < INFINITY and body.i > 0.0):
+            return body
+    return NULL
 
 
 @cython.no_gc_clear
@@ -1578,21 +1597,17 @@ cdef class Space:
     cdef int _check_bodies(self) except -1:
         cdef cpArray *bodies = self._space.dynamicBodies
         cdef cpBody *body
-        cdef int i
         if self._overflowed:
             body = _firstNonFiniteBody(bodies)
             if body != NULL:
                 self._raise_non_finite(body, self._space.curr_dt)
             self._overflowed = False
-        for i in range(bodies.num):
-            body = <cpBody *>bodies.arr[i]
-            if cpBodyGetType(body) != CP_BODY_TYPE_DYNAMIC:
-                continue
-            if not (body.m > 0.0 and body.m < INFINITY and body.i > 0.0):
-                b = <object>body.userData if body.userData != NULL else None
-                raise IllegalBody(
-                    f"Dynamic bodies must have a mass > 0 and < inf and moment > 0. "
-                    f"{b!r} has mass {body.m}, moment {body.i}.")
+        body = _firstBadMassBody(bodies)
+        if body != NULL:
+            b = <object>body.userData if body.userData != NULL else None
+            raise IllegalBody(
+                f"Dynamic bodies must have a mass > 0 and < inf and moment > 0. "
+                f"{b!r} has mass {body.m}, moment {body.i}.")
         # Bodies removed from the space whose shapes stayed still collide
         # through those shapes (a density of 0 can reach them there). Finding
         # them walks every shape, so only while there may be some: after such
@@ -1674,6 +1689,28 @@ cdef class Space:
         self._locked = False
         tamias_end_step(&self._space)
 
+    # Between two steps of one space on a step_spaces worker (no GIL): true
+    # when _step_finish and the next _step_begin would do nothing but unlock
+    # and lock again: no error or C flag of this thread to report, nothing
+    # deferred, no post-step callback, no thread waiting for the space, every
+    # check of _step_begin passing. The worker then runs the next step at
+    # once; otherwise it takes the GIL for the two calls. Keep in step with
+    # _step_begin, _step_finish and _after_step.
+    cdef bint _quiet_between_steps(self, cpBody *bad) noexcept nogil:
+        if bad != NULL or self._overflowed or self._may_have_orphans:
+            return False
+        if self._space.stepWaiters > 0 or cpOutOfMemory() or cpCollisionPeekFlags() != 0:
+            return False
+        # Only this thread can change these now: others wait for the step.
+        if (PyDict_GET_SIZE(<PyObject *>self._add_later) != 0
+                or PyDict_GET_SIZE(<PyObject *>self._remove_later) != 0
+                or PyDict_GET_SIZE(<PyObject *>self._post_step_callbacks) != 0
+                or <PyObject *>self._callback_error != <PyObject *>None):
+            return False
+        if _firstBadMassBody(self._space.dynamicBodies) != NULL:
+            return False
+        return self._space.constraints.num == 0 or tamias_constraints_ok(&self._space)
+
     cdef int _step_finish(self, cpBody *bad, double dt) except -1:
         self._locked = False
         tamias_end_step(&self._space)
@@ -1688,6 +1725,9 @@ cdef class Space:
 
     cdef _after_step(self):
         cdef list later
+        if not (self._add_later or self._remove_later or self._post_step_callbacks
+                or self._callback_error is not None):
+            return None   # the usual case: nothing deferred, nothing to run
         if self._add_later:
             later = list(self._add_later)
             self._add_later.clear()
