@@ -355,13 +355,17 @@ def main(argv=None):
     ap.add_argument("--envs", type=int, default=64, help="scenes stepped together")
     ap.add_argument("--threads", type=int, default=None, help="threads (default: every core)")
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--png", default=None, help="with --headless: write the first scenes here")
+    ap.add_argument("--out", "--png", dest="out", default=None,
+                    help="write a picture of the first four scenes here at the end")
     args = ap.parse_args(argv)
     env = PushVectorEnv(args.envs, threads=args.threads)
     rng = np.random.default_rng(args.seed)
     obs, _ = env.reset(seed=args.seed)
     if not args.headless:
-        return _window(env, obs, rng, args.frames)
+        rc = _window(env, obs, rng, args.frames)
+        if args.out:
+            env.picture(4).save(args.out)
+        return rc
     successes = episodes = 0
     t0 = time.perf_counter()
     for _ in range(args.frames):
@@ -374,9 +378,9 @@ def main(argv=None):
           f"in {elapsed:.2f} s: {steps / elapsed:,.0f} env steps/s, "
           f"{steps * env.frame_skip / elapsed:,.0f} physics steps/s; "
           f"{successes} of {episodes} finished episodes reached the goal")
-    if args.png:
-        env.picture(4).save(args.png)
-        print(f"wrote {args.png}")
+    if args.out:
+        env.picture(4).save(args.out)
+        print(f"wrote {args.out}")
     return 0
 
 

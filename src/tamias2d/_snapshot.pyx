@@ -679,6 +679,7 @@ def body_setstate(Body b not None, tuple state):
               "angular_velocity": src.w, "torque": src.t}
     for name in Body._pickle_attrs_general:
         setattr(b, name, values[name])
+    b._body.isBullet = 1 if src.isBullet else 0   # tamias2d's own flag
     if custom:
         for k, v in (<dict>custom).items():
             setattr(b, k, v)

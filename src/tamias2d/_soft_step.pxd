@@ -46,8 +46,9 @@ cdef const cpFloat SOFT_MAX_LOAD_DEFLECTION = 0.005
 # starts to bounce) ...
 cdef const cpFloat SOFT_MAX_STIFFENING = 10.0
 cdef const cpFloat SOFT_MIN_STIFFENING_CAP = 5.0
-# ... and the load it is stiffened for falls by at most this factor per step.
-cdef const cpFloat SOFT_LOAD_DECAY = 0.98
+# ... and the load it is stiffened for moves this fraction of the way to the
+# last step's load per step (a low-pass filter).
+cdef const cpFloat SOFT_LOAD_SMOOTHING = 0.1
 
 # Flags of a SoftBody.
 cdef enum:
@@ -65,6 +66,7 @@ cdef struct SoftBody:
     cpFloat qc, qs            # rotation since the step began (cos, sin)
     cpBody *body
     int flags
+    int contacts              # arbiters touching it this step (SoftPrepareContacts)
 
 # One contact point: anchors from the centres of gravity (fixed for the
 # step), the separation with the anchors' offset removed (Box2D's adjusted

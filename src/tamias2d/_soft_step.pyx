@@ -174,6 +174,7 @@ cdef bint SoftGatherBodies(SoftContext *ctx) noexcept nogil:
     sb.qs = 0.0
     sb.body = NULL
     sb.flags = 0
+    sb.contacts = 0
     for i in range(1, n):
         body = <cpBody *>arr.arr[i - 1]
         body.solverIndex = i
@@ -188,6 +189,7 @@ cdef bint SoftGatherBodies(SoftContext *ctx) noexcept nogil:
         sb.qs = 0.0
         sb.body = body
         sb.flags = 0
+        sb.contacts = 0
         if body.velocity_func == cpBodyUpdateVelocity:
             sb.flags |= SOFT_BODY_DEFAULT_VELOCITY
         if body.position_func == cpBodyUpdatePosition:
@@ -308,11 +310,17 @@ cdef inline cpFloat SoftContactSize(cpArbiter *arb) noexcept nogil:
     return fmin(sa, sb)
 
 cdef inline cpFloat SoftMaxStiffening(SoftBody *a, SoftBody *b) noexcept nogil:
-    # How much stiffer than the base a loaded contact may become: between
-    # bodies of alike mass (or against an immovable one) a lot; where a
+    # How much stiffer than the base a loaded contact may become: in a
+    # chain, between bodies of alike mass (or against an immovable one) a
+    # lot; where a
     # light body carries a heavy one the Gauss-Seidel passes no longer
     # converge on a stiff contact and the pair starts to bounce, so little.
     cdef cpFloat lo, hi
+    if (a.body != NULL and a.contacts > 2) or (b.body != NULL and b.contacts > 2):
+        # Not in a chain (a stack, an arch, a body on a body): in a web of
+        # contacts, a pyramid's, stiff contacts make Gauss-Seidel shake it
+        # apart (stiffness alone settles pyramids; a chain converges).
+        return 1.0
     if a.m_inv == 0.0 or b.m_inv == 0.0:
         return SOFT_MAX_STIFFENING
     lo = fmin(a.m_inv, b.m_inv)
@@ -368,6 +376,14 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
                     arbiters.num, sizeof(SoftContact)):
         return 0
     ctx.contacts = <SoftContact *>space.softScratch.contacts
+    # Each body's number of contacts: a contact is stiffened for its load
+    # only where both of its bodies have at most two (SoftMaxStiffening).
+    for i in range(arbiters.num):
+        arb = <cpArbiter *>arbiters.arr[i]
+        if arb.count <= 0 or arb.contacts == NULL:
+            continue
+        ctx.bodies[SoftIndex(arb.body_a, ctx.bodies, ctx.bodyCount)].contacts += 1
+        ctx.bodies[SoftIndex(arb.body_b, ctx.bodies, ctx.bodyCount)].contacts += 1
     for i in range(arbiters.num):
         arb = <cpArbiter *>arbiters.arr[i]
         if arb.count <= 0 or arb.contacts == NULL:
@@ -419,13 +435,11 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
             kT = a.m_inv + b.m_inv + a.i_inv * rtA * rtA + b.i_inv * rtB * rtB
             sp.normalMass = 1.0 / kN if kN > 0.0 else 0.0
             sp.tangentMass = 1.0 / kT if kT > 0.0 else 0.0
-            # The load that sets the point's stiffness rises at once and
-            # falls slowly (con.jBias, unused by this solver, carries it
-            # between steps): following every dip makes a loaded stack
-            # breathe.
-            load = con.jnAcc * loadCoef
-            if load < SOFT_LOAD_DECAY * con.jBias:
-                load = SOFT_LOAD_DECAY * con.jBias
+            # The load that sets the point's stiffness follows the impulses
+            # slowly (con.jBias, unused by this solver, carries it between
+            # steps): following every spike and dip makes a loaded stack
+            # breathe and a big pyramid shake itself apart.
+            load = con.jBias + SOFT_LOAD_SMOOTHING * (con.jnAcc * loadCoef - con.jBias)
             if warm == 0.0:
                 load = 0.0
             SoftPointSoftness(sp, &soft, omega, load, size, maxStiffening, ctx)

@@ -1330,9 +1330,11 @@ cdef class Body:
         """
         cdef dict d = pymunk_getstate(self)
         d["special"] += [("is_sleeping", self.is_sleeping),
-                         ("is_bullet", self.is_bullet),
                          ("_velocity_func", self._velocity_func),
                          ("_position_func", self._position_func)]
+        if self._body.isBullet:
+            # (only when set: a default body keeps pymunk's layout)
+            d["special"].append(("is_bullet", True))
         return d
 
     def __setstate__(self, state):

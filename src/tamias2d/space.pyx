@@ -1057,6 +1057,12 @@ cdef class Space:
         static and kinematic bodies). Time only: the same in any length
         units. 0 turns the push-out off (rigid velocity contacts).
 
+        A contact whose load (its last impulses) would sink it deeper than
+        0.5% of the smaller body's size at this stiffness is made stiffer,
+        stiffness and damping together, up to 10 times between bodies of
+        alike mass and 5 times across large mass ratios: the bottom of a tall
+        stack or pyramid then sinks no deeper than its top.
+
         >>> import tamias2d
         >>> tamias2d.Space().contact_hertz
         30.0
@@ -1225,6 +1231,12 @@ cdef class Space:
     def collision_slop(self):
         """Overlap allowed between shapes before they are pushed apart
         (default 0.1 as a C float: 0.10000000149011612).
+
+        In the soft solver it is the scene's unit of length instead: the
+        speculative distance (4 x slop) and the push-out speed (600 x slop
+        per second) follow it, and overlap is pushed out softly all the way
+        (a contact settles where its spring carries its load), as in Box2D.
+        Scale it with the scene.
 
         >>> import tamias2d
         >>> tamias2d.Space().collision_slop
