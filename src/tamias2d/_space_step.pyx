@@ -597,6 +597,48 @@ cdef void FloodFillComponent(cpBody *root, cpBody *body) noexcept nogil:
                 FloodFillComponent(root, constraint.b if body == constraint.a else constraint.a)
                 constraint = cpConstraintNext(constraint, body)
 
+# Kept awake this step: a body that touches or is jointed to a kinematic body
+# of the space, or touches a kinematic or orphan body that owns their arbiter
+# (is its body_a). The arbiter or joint then stays with the other body, which
+# stays awake; were this body to sleep, the next step would thread that
+# arbiter into its list a second time (a loop: the flood fill never ends).
+# Munk2D keeps such a body awake by waking it, which restarts its idle time at
+# 0; with a sleep_time_threshold <= 0 that is idle enough, and the body sleeps
+# anyway (pymunk aborts there, on the kinematic body's own component, or goes
+# on with the arbiter threaded twice). So at such a threshold the body's idle
+# time is -inf for this step: its component stays active, and the mark is
+# reset to 0 before the step ends. Idle times are >= 0 otherwise, so nothing
+# else holds the mark; at a threshold > 0 this is never called.
+cdef inline void _holdAwake(cpBody *body, cpSpace *space) noexcept nogil:
+    if (body.space == space and cpBodyGetType(body) == CP_BODY_TYPE_DYNAMIC
+            and not cpBodyIsSleeping(body)):
+        body.sleeping.idleTime = -INFINITY
+
+cdef void _holdAwakeTouching(cpSpace *space, int threadCount) noexcept nogil:
+    cdef cpArray *arbiters = space.arbiters
+    cdef cpArray *constraints = space.constraints
+    cdef cpArbiter *arb
+    cdef cpConstraint *constraint
+    cdef cpBody *a
+    cdef cpBody *b
+    cdef int i
+    for i in range(threadCount):
+        arb = <cpArbiter *>arbiters.arr[i]
+        a = arb.body_a
+        b = arb.body_b
+        if cpBodyGetType(b) == CP_BODY_TYPE_KINEMATIC and b.space == space:
+            _holdAwake(a, space)
+        if cpBodyGetType(a) == CP_BODY_TYPE_KINEMATIC or _orphanBody(a, space):
+            _holdAwake(b, space)
+    for i in range(constraints.num):
+        constraint = <cpConstraint *>constraints.arr[i]
+        a = constraint.a
+        b = constraint.b
+        if cpBodyGetType(b) == CP_BODY_TYPE_KINEMATIC and b.space == space:
+            _holdAwake(a, space)
+        if cpBodyGetType(a) == CP_BODY_TYPE_KINEMATIC and a.space == space:
+            _holdAwake(b, space)
+
 cdef inline cpBool ComponentActive(cpBody *root, cpFloat threshold) noexcept nogil:
     cdef cpBody *body = root
     while body != NULL:
@@ -618,6 +660,8 @@ cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int threadCount) 
     cdef cpBody *other
     cdef cpArbiter *arb
     cdef cpConstraint *constraint
+    # See _holdAwake: only where Munk2D cannot keep a body awake by waking it.
+    cdef cpBool holdAwake = sleep and not (space.sleepTimeThreshold > 0.0)
 
     if sleep:
         dv = space.idleSpeedThreshold
@@ -664,11 +708,19 @@ cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int threadCount) 
                 cpBodyActivate(b)
             i += 1
 
+        if holdAwake:
+            # After all the waking above, which restarts idle times at 0.
+            _holdAwakeTouching(space, count)
+
         # Build the components and put the idle ones to sleep.
         i = 0
         while i < bodies.num:
             body = <cpBody *>bodies.arr[i]
-            if ComponentRoot(body) == NULL:
+            # Kinematic bodies never sleep. (Munk2D finds a kinematic body's
+            # empty component idle once the threshold is <= 0, as its idle
+            # time stays 0, and aborts on deactivating it; above 0 the
+            # component is always active, so skipping it changes nothing.)
+            if ComponentRoot(body) == NULL and cpBodyGetType(body) == CP_BODY_TYPE_DYNAMIC:
                 FloodFillComponent(body, body)
                 if not ComponentActive(body, space.sleepTimeThreshold):
                     cpArrayPush(space.sleepingComponents, body)
@@ -682,6 +734,8 @@ cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int threadCount) 
             # Only sleeping bodies keep their component links.
             body.sleeping.root = NULL
             body.sleeping.next = NULL
+            if body.sleeping.idleTime < 0.0:
+                body.sleeping.idleTime = 0.0    # the _holdAwake mark, spent
 
 
 

@@ -1,0 +1,137 @@
+"""Regression tests for sleeping, collision persistence 0 and the step's
+overflow check: kinematic bodies put to sleep, a body outside the space that
+woke into it and crashed activate(), arbiters left on removed shapes, bodies
+that went NaN where the check did not look.
+
+Each test failed (or crashed, or hung) before its fix. Those that crashed or
+hung run in a forked child (tests/isolated.py), so that a regression fails
+the one test. What pymunk 7.3.1 does with the same script is said beside
+each; where pymunk neither crashes nor hangs, tamias2d gives its numbers.
+"""
+import copy
+import math
+import pickle
+
+import pytest
+
+import tamias2d
+from tamias2d import Body, Circle, PinJoint, PivotJoint, Poly, Segment, Space
+from tamias2d.errors import IllegalBody
+
+from isolated import isolated
+
+DT = 1 / 60
+
+
+def state(b):
+    return (*b.position, b.angle, *b.velocity, b.angular_velocity)
+
+
+def finite(b):
+    return all(map(math.isfinite, state(b)))
+
+
+def sound(space):
+    problem = space._contact_graph_problem()
+    assert not problem, problem
+
+
+# -- kinematic bodies and sleep_time_threshold <= 0 ----------------------------------------
+# Munk2D finds the empty component of a kinematic body idle once the threshold
+# is <= 0 (its idle time stays 0, and 0 < 0 is false) and deactivates it:
+# pymunk aborts ("Attempting to deactivate a non-dynamic body"); tamias2d put
+# the body to sleep, so it stopped moving and its shapes went to the static
+# index.
+
+@pytest.mark.parametrize("threshold", [0.0, 1e-300, 1e-9, 0.5])
+def test_kinematic_bodies_never_sleep(threshold):
+    s = Space()
+    s.sleep_time_threshold = threshold
+    k = Body(body_type=Body.KINEMATIC)
+    k.velocity = (10, 0)
+    k.angular_velocity = 1
+    s.add(k, Circle(k, 1))
+    bare = Body(body_type=Body.KINEMATIC)
+    bare.velocity = (0, 5)
+    s.add(bare)
+    for i in range(20):
+        s.step(0.1)
+        assert not k.is_sleeping and not bare.is_sleeping
+        sound(s)
+    assert k.position.x == pytest.approx(20.0)
+    assert bare.position.y == pytest.approx(10.0)
+
+
+@isolated(timeout=60)
+def test_a_box_on_a_kinematic_platform_stays_awake_at_threshold_0():
+    # The box touches the platform: Munk2D wakes it (idle time 0), which at a
+    # threshold of 0 is idle enough, so it slept with its arbiter owned by
+    # the platform still threaded; the next step threaded it again.
+    for platform_first in (True, False):
+        s = Space()
+        s.gravity = 0, -100
+        s.sleep_time_threshold = 0.0
+        platform = Body(body_type=Body.KINEMATIC)
+        platform.velocity = (5, 0)
+        box = Body(1, 10)
+        box.position = (0, 0.99)   # touching from the start (else it sleeps in mid-air)
+        pshape = Poly.create_box(platform, (10, 1))
+        bshape = Poly.create_box(box, (1, 1))
+        pshape.friction = bshape.friction = 1.0
+        if platform_first:
+            s.add(platform, pshape, box, bshape)
+        else:
+            s.add(box, bshape, platform, pshape)
+        for _ in range(120):
+            s.step(DT)
+            sound(s)
+            assert not platform.is_sleeping
+        assert not box.is_sleeping
+        # carried along by friction, resting on the platform
+        assert box.position.x > 5
+        assert box.position.y == pytest.approx(1.0, abs=0.2)
+
+
+@isolated(timeout=60)
+def test_a_body_jointed_to_a_kinematic_body_stays_awake_at_threshold_0():
+    s = Space()
+    s.sleep_time_threshold = 0.0
+    k = Body(body_type=Body.KINEMATIC)
+    k.velocity = (10, 0)
+    b = Body(1, 10)
+    b.position = (0, -5)
+    s.add(k, b, PinJoint(k, b))
+    for _ in range(60):
+        s.step(DT)
+        sound(s)
+    assert not b.is_sleeping
+    assert b.position.x > 5      # pulled along
+
+
+def test_threshold_0_without_kinematic_bodies_is_pymunks():
+    # Where pymunk does not abort, a threshold of 0 keeps its meaning bit for
+    # bit: every body falls asleep at the end of every step, moving or not.
+    pymunk = pytest.importorskip("pymunk")
+
+    def run(m):
+        s = m.Space()
+        s.gravity = 0, -100
+        s.sleep_time_threshold = 0.0
+        s.add(m.Segment(s.static_body, (-50, 0), (50, 0), 1))
+        bodies = []
+        for i in range(6):
+            b = m.Body(1, 10)
+            b.position = (3 * i - 8, 2 + 2.5 * i)
+            b.velocity = (i, 0)
+            s.add(b, m.Circle(b, 1))
+            bodies.append(b)
+        out = []
+        for step in range(90):
+            if step % 15 == 0:
+                bodies[step // 15].activate()
+            s.step(DT)
+            out.append([(tuple(b.position), tuple(b.velocity), b.is_sleeping) for b in bodies])
+        return out
+    assert run(tamias2d) == run(pymunk)
+
+
