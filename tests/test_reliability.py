@@ -135,3 +135,111 @@ def test_threshold_0_without_kinematic_bodies_is_pymunks():
     assert run(tamias2d) == run(pymunk)
 
 
+# -- a body outside the space in a sleeping component ----------------------------------------
+
+@isolated(timeout=60)
+def test_activate_a_bare_jointed_body_that_became_a_sleeping_root():
+    # A body outside the space, held by a joint, joins its partner's
+    # component and sleeps with it. Removing the joint woke the component and
+    # Munk2D woke that body into the space's body array; the next step made it
+    # the root of a sleeping component of its own, and activate() on it
+    # dereferenced its NULL space (pymunk segfaults the same way).
+    s = Space()
+    s.gravity = 0, -10
+    s.sleep_time_threshold = 0.0
+    a = Body(1, 1)
+    b = Body(1, 1)
+    b.position = (10, 0)
+    j = PinJoint(a, b)
+    s.add(a, Circle(a, 1), j)
+    s.step(0.1)
+    assert a.is_sleeping and b.is_sleeping
+    s.remove(j)
+    assert not b.is_sleeping
+    s.step(0.1)
+    b.activate()
+    for _ in range(5):
+        s.step(0.1)
+        sound(s)
+    # The space never integrates a body it does not hold.
+    assert b.position == (10, 0)
+    assert b.space is None and b not in s.bodies
+
+
+@isolated(timeout=60)
+def test_a_jointed_body_outside_the_space_sleeps_and_wakes_with_its_partner():
+    # The joint stays in the solver whichever body owns it (is its body a).
+    for outside_first in (False, True):
+        s = Space()
+        s.sleep_time_threshold = 0.0
+        a = Body(1, 1)
+        b = Body(1, 1)
+        b.position = (10, 0)
+        j = PinJoint(b, a) if outside_first else PinJoint(a, b)
+        s.add(a, Circle(a, 1), j)
+        s.step(DT)
+        assert a.is_sleeping and b.is_sleeping
+        a.activate()
+        assert not a.is_sleeping and not b.is_sleeping
+        s.sleep_time_threshold = 1.0    # at 0 the pair would sleep again before the solver
+        a.velocity = (-50, 0)
+        s.step(DT)
+        sound(s)
+        assert b.velocity.x < 0          # the joint was solved: b was pulled
+        assert b.position == (10, 0)     # but b, outside the space, is not moved
+        s.remove(j)
+        for _ in range(5):
+            s.step(DT)
+            sound(s)
+        assert b.position == (10, 0)     # still moving, still not integrated
+
+
+@isolated(timeout=60)
+def test_a_stale_component_root_does_not_follow_a_body_into_another_space():
+    # At a threshold > 0 the component of a body and a bare jointed body
+    # outside the space stays awake (the outside body's idle time is 0), and
+    # the step resets the component links of the bodies in its array only:
+    # the outside body kept its root (Munk2D too). Added to another space, it
+    # counted as asleep there while awake: the step never unthreaded its
+    # arbiters and its first contact looped (pymunk hangs).
+    s = Space()
+    s.sleep_time_threshold = 0.05
+    a = Body(1, 1)
+    b = Body(1, 1)
+    b.position = (10, 0)
+    j = PinJoint(a, b)
+    s.add(a, Circle(a, 1), j)
+    for _ in range(5):
+        s.step(0.1)
+    s.remove(j)
+    s.remove(*a.shapes, a)
+    del a, j
+    s2 = Space()
+    s2.sleep_time_threshold = 0.05
+    s2.gravity = 0, -10
+    c = Body(1, 1)
+    c.position = (10, 1.5)
+    s2.add(b, Circle(b, 1), Segment(s2.static_body, (-100, -1), (100, -1), 1), c, Circle(c, 1))
+    assert not b.is_sleeping
+    for _ in range(100):
+        s2.step(0.05)
+        sound(s2)
+    assert b.is_sleeping and c.is_sleeping   # a resting pile falls asleep
+
+
+def test_the_partner_of_a_stale_root_still_wakes_with_it():
+    # While the joint is in the space, an outside body's root keeps Munk2D's
+    # meaning: waking the outside body wakes its partner's component.
+    s = Space()
+    s.sleep_time_threshold = 0.05
+    a = Body(1, 1)
+    b = Body(1, 1)
+    b.position = (10, 0)
+    s.add(a, Circle(a, 1), PinJoint(a, b))
+    for _ in range(5):
+        s.step(0.1)
+    assert a.is_sleeping
+    b.activate()
+    assert not a.is_sleeping
+
+

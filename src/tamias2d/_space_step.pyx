@@ -515,7 +515,13 @@ cdef void cpSpaceActivateBody(cpSpace *space, cpBody *body) noexcept nogil:
             cpfree(contacts)
         arb = cpArbiterNext(arb, body)
 
-    constraint = body.constraintList
+    _pushOwnedConstraints(space, body)
+
+# The joints a body owns (it is their body a, or their body a is static) go
+# back into the solver's array as the body wakes.
+cdef void _pushOwnedConstraints(cpSpace *space, cpBody *body) noexcept nogil:
+    cdef cpConstraint *constraint = body.constraintList
+    cdef cpBody *bodyA
     while constraint != NULL:
         bodyA = constraint.a
         if body == bodyA or cpBodyGetType(bodyA) == CP_BODY_TYPE_STATIC:
@@ -749,7 +755,18 @@ cdef void cpSpaceWakeComponent(cpSpace *space, cpBody *root) noexcept nogil:
         bodyA.sleeping.idleTime = 0.0
         bodyA.sleeping.root = NULL
         bodyA.sleeping.next = NULL
-        cpSpaceActivateBody(space, bodyA)
+        if bodyA.space == space:
+            cpSpaceActivateBody(space, bodyA)
+        else:
+            # A body outside the space, held by a joint, joins the component
+            # of the bodies it is jointed to (the flood fill follows joints).
+            # Munk2D wakes it into the space's body array: the space then
+            # integrates a body it does not hold, the body can become the
+            # root of a sleeping component, and activate() on that root
+            # dereferences its NULL space (pymunk segfaults). Only its joints
+            # go back to the solver; it has no shapes here (a body with shapes
+            # in the space is an orphan and never joins a component).
+            _pushOwnedConstraints(space, bodyA)
         bodyA = next
     cpArrayDeleteObj(space.sleepingComponents, root)
 

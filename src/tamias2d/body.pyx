@@ -42,6 +42,7 @@ STATIC = <int>CP_BODY_TYPE_STATIC
 # The helpers of chipmunk_private.h are in _private.pxd.
 from tamias2d._threadguard cimport tamias_wait_body
 from tamias2d._private cimport cpArbiterNext, cpConstraintNext, apply_impulse
+from tamias2d._containers cimport cpArrayContains
 
 
 # -- space hooks ---------------------------------------------------------------------
@@ -293,6 +294,24 @@ cdef void cpBodyApplyImpulseAtLocalPoint(cpBody *body, cpVect impulse, cpVect po
 
 
 # -- cpSpaceComponent.c, body side ----------------------------------------------------
+
+# A body outside every space is reached by the flood fill through its joints
+# and takes the root of the component it joins. The step resets the links of
+# the bodies in its array only, so when that component stays awake the body
+# keeps its root (Munk2D too; the flood fill then passes the body over, which
+# the chipmunk solver keeps, bit for bit). The root may later be awake, part
+# of another component or freed. It is followed only while it is still the
+# root of a sleeping component of a space the body is jointed into, which
+# keeps Munk2D's waking of it and never reads a freed body.
+cdef cpBool _rootStillSleeps(cpBody *body, cpBody *root) noexcept nogil:
+    cdef cpConstraint *c = body.constraintList
+    while c != NULL:
+        if c.space != NULL and cpArrayContains(c.space.sleepingComponents, root):
+            return 1
+        c = cpConstraintNext(c, body)
+    return 0
+
+
 cdef void cpBodyActivate(cpBody *body) noexcept nogil:
     cdef cpBody *root
     cdef cpBody *other
@@ -302,6 +321,10 @@ cdef void cpBodyActivate(cpBody *body) noexcept nogil:
     body.sleeping.idleTime = 0.0
 
     root = body.sleeping.root
+    if root != NULL and body.space == NULL and not _rootStillSleeps(body, root):
+        # A stale root (see _rootStillSleeps): nothing to wake, and it may
+        # have been freed.
+        root = NULL
     if root != NULL and cpBodyIsSleeping(root):
         if _hooks.wake_component != NULL:
             _hooks.wake_component(root.space, root)

@@ -315,6 +315,17 @@ cdef cpShape *cpSpaceAddShape(cpSpace *space, cpShape *shape) noexcept nogil:
     return shape
 
 cdef cpBody *cpSpaceAddBody(cpSpace *space, cpBody *body) noexcept nogil:
+    if body.sleeping.root != NULL:
+        # A body outside every space with component links: asleep in the
+        # component of bodies it is jointed to (woken here, as adding wakes),
+        # or left over from a component that stayed awake, which resets only
+        # the links of the bodies in its array (Munk2D keeps the stale root,
+        # and the body then counts as asleep in the space it joins: the step
+        # never unthreads its arbiters and the next contact loops; pymunk
+        # hangs). cpBodyActivate follows the root only if it still sleeps.
+        cpBodyActivate(body)
+        body.sleeping.root = NULL
+        body.sleeping.next = NULL
     if not cpArrayPush(cpSpaceArrayForBodyType(space, cpBodyGetType(body)), body):
         return NULL
     body.space = space
