@@ -21,7 +21,8 @@ from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, 
     CP_ARBITER_STATE_FIRST_COLLISION, CP_ARBITER_STATE_NORMAL,
     CP_ARBITER_STATE_IGNORE, CP_ARBITER_STATE_CACHED)
 from tamias2d._containers cimport (cpcalloc, cpfree, cpArrayPush, cpArrayPop,
-    cpArrayDeleteObj, cpArrayContains, cpHashSetInsert, cpHashSetEach, cpHashSetFilter)
+    cpArrayDeleteObj, cpArrayContains, cpHashSetInsert, cpHashSetFind, cpHashSetEach,
+    cpHashSetFilter)
 from tamias2d._spatialindex cimport (cpSpatialIndexEach, cpSpatialIndexInsert, cpSpatialIndexRemove,
     cpSpatialIndexReindexQuery)
 from tamias2d.vector cimport cpVect, cpBB, cpvsub, cpvlengthsq, cpBBIntersects
@@ -816,7 +817,15 @@ cdef void _hookSleepWithGroup(cpBody *body, cpBody *group) noexcept nogil:
     while arb != NULL:
         next_arb = cpArbiterNext(arb, body)
         other = arb.body_b if arb.body_a == body else arb.body_a
-        if (cpBodyGetType(other) != CP_BODY_TYPE_STATIC
+        if not _arbiterCached(space, arb):
+            # Last step's arbiter, already expired: with a collision
+            # persistence of 0 a step's arbiters leave the cache (and go back
+            # to the pool) at once, threaded until the next step unthreads
+            # them. A sleeping body would keep it threaded while the pool hands
+            # it to another pair (pymunk hangs). The next step unthreads it
+            # anyway if the body stays awake; here it goes now.
+            cpArbiterUnthread(arb)
+        elif (cpBodyGetType(other) != CP_BODY_TYPE_STATIC
                 and (groupRoot == NULL or other.sleeping.root != groupRoot)):
             if cpBodyIsSleeping(other):
                 cpBodyActivate(other)
@@ -835,6 +844,13 @@ cdef void _hookSleepWithGroup(cpBody *body, cpBody *group) noexcept nogil:
         body.sleeping.idleTime = 0.0
         cpArrayPush(space.sleepingComponents, body)
     cpArrayDeleteObj(space.dynamicBodies, body)
+
+cdef cpBool _arbiterCached(cpSpace *space, cpArbiter *arb) noexcept nogil:
+    cdef const cpShape *shape_pair[2]
+    shape_pair[0] = arb.a
+    shape_pair[1] = arb.b
+    return cpHashSetFind(space.cachedArbiters, CP_HASH_PAIR(<cpHashValue>arb.a, <cpHashValue>arb.b),
+                         shape_pair) == arb
 
 cdef tamias_BodySpaceHooks _hooks
 _hooks.wake_component = cpSpaceWakeComponent
