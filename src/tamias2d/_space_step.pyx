@@ -871,6 +871,31 @@ cdef cpBody *_firstNonFiniteBody(cpArray *bodies) noexcept nogil:
     return NULL
 
 
+cdef cpBody *tamias_first_non_finite_body(cpSpace *space) noexcept nogil:
+    # Every body a step can change: the awake array (dynamic and kinematic
+    # bodies), the static bodies (a contact or joint impulse of inf times
+    # their zero inverse mass is NaN) and joints' bodies outside the space,
+    # which the solver pushes but does not integrate. Sleeping bodies are not
+    # touched by a step, and orphans (shapes left in the space) are found by
+    # the Python side (Space._check_bodies), which knows when there may be
+    # some. The static array is short and the joints cost two pointer tests.
+    cdef cpBody *body = _firstNonFiniteBody(space.dynamicBodies)
+    cdef cpConstraint *c
+    cdef int i
+    if body != NULL:
+        return body
+    body = _firstNonFiniteBody(space.staticBodies)
+    if body != NULL:
+        return body
+    for i in range(space.constraints.num):
+        c = <cpConstraint *>space.constraints.arr[i]
+        if c.a.space != space and _bodyNonFinite(c.a):
+            return c.a
+        if c.b.space != space and _bodyNonFinite(c.b):
+            return c.b
+    return NULL
+
+
 cdef void _clearNonFiniteContactImpulses(void *elt, void *data) noexcept nogil:
     cdef cpArbiter *arb = <cpArbiter *>elt
     cdef cpContact *con
@@ -901,6 +926,8 @@ cdef void _scanOrphans(void *obj, void *data) noexcept nogil:
     if body == NULL or not _orphanBody(body, scan.space):
         return
     scan.orphans += 1
+    if scan.nonFinite == NULL and _bodyNonFinite(body):
+        scan.nonFinite = body
     if scan.bad == NULL and not (body.m > 0.0 and body.m < INFINITY and body.i > 0.0):
         scan.bad = body
 

@@ -80,7 +80,8 @@ from tamias2d._private cimport (cpConstraintNext, cpSpaceArrayForBodyType,
     cpCallHandlers, PHASE_SEPARATE)
 from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, cpSpaceGetPostStepCallback,
     cpSpaceAddPostStepCallback, cpSpaceStep, cpShapeUpdateFunc, cpSpaceWakeComponent, _bodyNonFinite,
-    _firstNonFiniteBody, _forgetNonFiniteImpulses, OrphanScan, _scanOrphans)
+    _firstNonFiniteBody, tamias_first_non_finite_body, _forgetNonFiniteImpulses, OrphanScan,
+    _scanOrphans)
 from tamias2d._soft_step cimport (cpSoftStep, SoftSettingsInit, SoftScratchFree, SoftPushOut,
     SoftSpeculative)
 from tamias2d._structs cimport TAMIAS_SOLVER_CHIPMUNK, TAMIAS_SOLVER_SOFT
@@ -535,7 +536,7 @@ cdef cpBody *tamias_space_step(cpSpace *space, cpFloat dt) noexcept nogil:
         cpSoftStep(space, dt)
     else:
         cpSpaceStep(space, dt)
-    return _firstNonFiniteBody(space.dynamicBodies)
+    return tamias_first_non_finite_body(space)
 
 
 # ================================================================================================
@@ -1582,8 +1583,10 @@ cdef class Space:
     # -- the step ----------------------------------------------------------------------------
 
     cdef int _raise_non_finite(self, cpBody *body, double dt) except -1:
-        cdef cpArray *bodies = self._space.dynamicBodies
+        cdef cpArray *bodies
         cdef cpBody *other
+        cdef cpConstraint *c
+        cdef int i
         _forgetNonFiniteImpulses(&self._space)
         b = <object>body.userData if body.userData != NULL else None
         err = IllegalBody(
@@ -1592,19 +1595,53 @@ cdef class Space:
             f"Some input is too large for double precision (the time step, a velocity, a "
             f"force, a size). The space refuses to step until the bodies in this "
             f"exception's .bodies are set to finite values or removed.")
-        err.bodies = []
-        for i in range(bodies.num):
-            other = <cpBody *>bodies.arr[i]
-            if _bodyNonFinite(other) and other.userData != NULL:
-                err.bodies.append(<object>other.userData)
+        # Every body the check of the step looks at (tamias_first_non_finite_body
+        # and the orphans): the awake ones, the static ones, joints' bodies
+        # outside the space, bodies whose shapes stayed in the space.
+        found = {}
+        for k in range(2):
+            bodies = self._space.dynamicBodies if k == 0 else self._space.staticBodies
+            for i in range(bodies.num):
+                other = <cpBody *>bodies.arr[i]
+                if _bodyNonFinite(other) and other.userData != NULL:
+                    found[<object>other.userData] = None
+        for i in range(self._space.constraints.num):
+            c = <cpConstraint *>self._space.constraints.arr[i]
+            other = c.a
+            if other.space != &self._space and _bodyNonFinite(other) and other.userData != NULL:
+                found[<object>other.userData] = None
+            other = c.b
+            if other.space != &self._space and _bodyNonFinite(other) and other.userData != NULL:
+                found[<object>other.userData] = None
+        if self._may_have_orphans:
+            for shape in list(self._shapes):
+                other = (<Shape>shape)._shape.body
+                if (other != NULL and other.space != &self._space and _bodyNonFinite(other)
+                        and other.userData != NULL):
+                    found[<object>other.userData] = None
+        err.bodies = list(found)
         raise err
+
+    # The first non-finite body of the space, orphans included.
+    cdef cpBody *_first_non_finite(self):
+        cdef cpBody *body = tamias_first_non_finite_body(&self._space)
+        cdef OrphanScan scan
+        if body != NULL or not self._may_have_orphans:
+            return body
+        scan.space = &self._space
+        scan.bad = NULL
+        scan.nonFinite = NULL
+        scan.orphans = 0
+        cpSpatialIndexEach(self._space.dynamicShapes, _scanOrphans, &scan)
+        cpSpatialIndexEach(self._space.staticShapes, _scanOrphans, &scan)
+        return scan.nonFinite
 
     cdef int _check_bodies(self) except -1:
         cdef cpArray *bodies = self._space.dynamicBodies
         cdef cpBody *body
         cdef int i
         if self._overflowed:
-            body = _firstNonFiniteBody(bodies)
+            body = self._first_non_finite()
             if body != NULL:
                 self._raise_non_finite(body, self._space.curr_dt)
             self._overflowed = False
@@ -1626,6 +1663,7 @@ cdef class Space:
         cdef OrphanScan scan
         scan.space = &self._space
         scan.bad = NULL
+        scan.nonFinite = NULL
         scan.orphans = 0
         cpSpatialIndexEach(self._space.dynamicShapes, _scanOrphans, &scan)
         cpSpatialIndexEach(self._space.staticShapes, _scanOrphans, &scan)
@@ -1703,6 +1741,10 @@ cdef class Space:
         tamias_end_step(&self._space)
         try:
             self._check_c_errors()
+            if bad == NULL and self._may_have_orphans:
+                # Bodies removed from the space whose shapes stayed: the C
+                # check cannot see them (see _first_non_finite).
+                bad = self._first_non_finite()
             if bad != NULL:
                 self._overflowed = True
                 self._raise_non_finite(bad, dt)
