@@ -1191,8 +1191,11 @@ cdef class Space:
     @idle_speed_threshold.setter
     def idle_speed_threshold(self, value):
         cdef double v = value
-        if v != v:
-            raise ValueError("idle_speed_threshold must be a number, not NaN")
+        # A speed: negative ones (pymunk squares them) mean nothing. inf is
+        # kept: every body counts as idle, and sleeps after the idle time.
+        if not (v >= 0.0):
+            raise ValueError(f"idle_speed_threshold must be a speed >= 0 (0 derives it from "
+                             f"gravity), not {value!r}")
         tamias_wait_for_step(&self._space)
         self._space.idleSpeedThreshold = v
 
@@ -1201,7 +1204,12 @@ cdef class Space:
         """Idle time after which a group of bodies falls asleep; ``inf``
         (the default) turns sleeping off. Setting it to ``inf`` wakes every
         sleeping body (pymunk leaves them asleep and its next steps can
-        hang); NaN is refused.
+        hang). NaN and negative times are refused (ValueError).
+
+        At 0 every dynamic body falls asleep at the end of each step, moving
+        or not, as in pymunk (no idle time is below 0), except those that
+        touch or are jointed to a kinematic body: they stay awake (pymunk
+        aborts there). Kinematic bodies never sleep, at any threshold.
 
         >>> import tamias2d
         >>> tamias2d.Space().sleep_time_threshold
@@ -1213,9 +1221,9 @@ cdef class Space:
     def sleep_time_threshold(self, value):
         cdef double v = value
         cdef cpArray *components = self._space.sleepingComponents
-        if v != v:
-            raise ValueError("sleep_time_threshold must be a number (inf turns sleeping off), "
-                             "not NaN")
+        if not (v >= 0.0):
+            raise ValueError(f"sleep_time_threshold must be a time >= 0 (inf turns sleeping "
+                             f"off), not {value!r}")
         tamias_wait_for_step(&self._space)
         self._space.sleepTimeThreshold = v
         if v == INFINITY:
@@ -1252,6 +1260,12 @@ cdef class Space:
         """Fraction of overlap left uncorrected after one second (default
         ``pow(1 - 0.1, 60)`` in C floats).
 
+        A step corrects ``1 - collision_bias ** dt`` of the overlap: 0
+        corrects it all at once, 1 not at all. NaN, inf and negative values
+        are refused (ValueError: the correction would be NaN). Values above 1
+        are accepted, as pymunk's own tests set them, but they push
+        overlapping shapes further in.
+
         >>> import tamias2d
         >>> tamias2d.Space().collision_bias
         0.0017970074436457143
@@ -1261,6 +1275,9 @@ cdef class Space:
     @collision_bias.setter
     def collision_bias(self, value):
         cdef double bias = value
+        if not (isfinite(bias) and bias >= 0.0):
+            raise ValueError(f"collision_bias must be a finite number >= 0 (the fraction of "
+                             f"overlap left after a second, 0 to 1), not {value!r}")
         tamias_wait_for_step(&self._space)
         self._space.collisionBias = bias
 
