@@ -212,6 +212,7 @@ def test_a_stale_component_root_does_not_follow_a_body_into_another_space():
     for _ in range(5):
         s.step(0.1)
     s.remove(j)
+    assert not b.is_sleeping         # jointed into no space: its root is gone
     s.remove(*a.shapes, a)
     del a, j
     s2 = Space()
@@ -225,6 +226,40 @@ def test_a_stale_component_root_does_not_follow_a_body_into_another_space():
         s2.step(0.05)
         sound(s2)
     assert b.is_sleeping and c.is_sleeping   # a resting pile falls asleep
+
+
+@isolated(timeout=60)
+def test_a_stale_component_root_survives_its_body_leaving_and_copies():
+    # The outside body b is jointed to a and x; their component stays awake
+    # (b's idle time is 0) and b kept a's address as its root. With a
+    # removed and freed, a copy found a link to a body it does not hold (the
+    # capture refused the space) and waking b read freed memory.
+    import gc
+    s = Space()
+    s.sleep_time_threshold = 0.05
+    a, b, x = Body(1, 1), Body(1, 1), Body(1, 1)
+    b.position, x.position = (10, 0), (20, 0)
+    j1, j2 = PinJoint(a, b), PinJoint(b, x)
+    s.add(a, Circle(a, 1), x, Circle(x, 1), j1, j2)
+    for _ in range(3):
+        s.step(0.1)
+    s.remove(j1)
+    s.remove(*a.shapes, a)
+    del a, j1
+    gc.collect()
+    for _ in range(5):
+        s.step(0.1)
+    clone = copy.deepcopy(s)
+    pickle.loads(pickle.dumps(s))
+    assert x.is_sleeping
+    b.activate()                     # wakes x, the body it is jointed to
+    assert not x.is_sleeping
+    for space in (s, clone):
+        for _ in range(5):
+            space.step(0.1)
+            sound(space)
+    s.remove(j2)
+    assert not b.is_sleeping         # jointed into no space: no root left
 
 
 def test_the_partner_of_a_stale_root_still_wakes_with_it():
@@ -498,3 +533,17 @@ def test_the_check_costs_nothing_in_numbers():
             out.append([state(b) for b in bodies] + [state(outside)])
         return out
     assert run(tamias2d) == run(pymunk)
+
+
+def test_a_body_outside_the_space_turned_kinematic_does_not_sleep():
+    s = Space()
+    s.sleep_time_threshold = 0.05
+    a = Body(1, 1)
+    b = Body(1, 1)
+    b.position = (10, 0)
+    s.add(a, Circle(a, 1), PinJoint(a, b))
+    for _ in range(3):
+        s.step(0.1)
+    assert b.is_sleeping           # the flood fill's mark, as in pymunk
+    b.body_type = Body.KINEMATIC
+    assert not b.is_sleeping

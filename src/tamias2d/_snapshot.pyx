@@ -1953,8 +1953,9 @@ cdef int _read_body_arrays(Reader *r, Parsed *p) except -1:
 #   dynamic bodies with a valid mass that name it as root; no chain runs
 #   into another or loops;
 # * a body outside the space whose root is stale (a joint's body the flood
-#   fill met once) points at an awake body or a listed root: waking it from
-#   a body that sleeps but is no root would wake half a component.
+#   fill met once) points at itself (what the step leaves), an awake body or
+#   a listed root (what older versions left): waking it from a body that
+#   sleeps but is no root would wake half a component.
 cdef int _check_components(Parsed *p) except -1:
     cdef Py_ssize_t n_in = p.s.nspace_bodies + p.s.has_static
     cdef int32_t k, i, root, cur
@@ -2026,7 +2027,9 @@ cdef int _check_components(Parsed *p) except -1:
             _bad(f"body {i} is in the space but in none of its body arrays or sleeping "
                  f"components")
         root = p.bodies[i].root
-        if root >= 0 and p.bodies[root].root >= 0 and not (
+        # (A root naming the body itself is the engine's stale root, see
+        # _settleOutsideMembers in _space_step.pyx.)
+        if root >= 0 and root != i and p.bodies[root].root >= 0 and not (
                 p.role[root] == ROLE_ASLEEP and p.comp[root] == root):
             _bad(f"body {i} (outside the space) names body {root} as its sleeping root, which "
                  f"sleeps but is not a component's root")

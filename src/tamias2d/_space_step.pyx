@@ -584,25 +584,49 @@ cdef inline void ComponentAdd(cpBody *root, cpBody *body) noexcept nogil:
         body.sleeping.next = root.sleeping.next
         root.sleeping.next = body
 
-cdef void FloodFillComponent(cpBody *root, cpBody *body) noexcept nogil:
+cdef int FloodFillComponent(cpBody *root, cpBody *body) noexcept nogil:
     # Kinematic bodies never sleep and keep what they touch awake; static
     # bodies are asleep all the time; orphans (see _orphanBody) are left out.
-    # Recursive as in Munk2D.
+    # Recursive as in Munk2D. Returns how many bodies outside the space
+    # (held by joints) joined the component.
     cdef cpBody *other_root
     cdef cpArbiter *arb
     cdef cpConstraint *constraint
+    cdef int outside = 0
     if cpBodyGetType(body) == CP_BODY_TYPE_DYNAMIC and not _orphanBody(body, root.space):
         other_root = ComponentRoot(body)
         if other_root == NULL:
             ComponentAdd(root, body)
+            if body.space != root.space:
+                outside = 1
             arb = body.arbiterList
             while arb != NULL:
-                FloodFillComponent(root, arb.body_b if body == arb.body_a else arb.body_a)
+                outside += FloodFillComponent(root, arb.body_b if body == arb.body_a else arb.body_a)
                 arb = cpArbiterNext(arb, body)
             constraint = body.constraintList
             while constraint != NULL:
-                FloodFillComponent(root, constraint.b if body == constraint.a else constraint.a)
+                outside += FloodFillComponent(root, constraint.b if body == constraint.a
+                                              else constraint.a)
                 constraint = cpConstraintNext(constraint, body)
+    return outside
+
+# A component that stays awake: its bodies in the space lose their links as
+# the component loop passes them, but a body outside the space is in no
+# array and keeps them (Munk2D keeps the root and the next body, which may
+# later leave the space and be freed). The root stays non-NULL, as in
+# Munk2D: the flood fill passes such a body over from then on, and the
+# chipmunk solver keeps that, bit for bit. It names the body itself, which
+# is always there, and the next link goes; cpBodyActivate wakes what the body
+# is jointed to in its stead (body.pyx, _rootStillSleeps).
+cdef void _settleOutsideMembers(cpBody *root, cpSpace *space) noexcept nogil:
+    cdef cpBody *body = root
+    cdef cpBody *next
+    while body != NULL:
+        next = body.sleeping.next
+        if body.space != space:
+            body.sleeping.root = body
+            body.sleeping.next = NULL
+        body = next
 
 # Kept awake this step: a body that touches or is jointed to a kinematic body
 # of the space, or touches a kinematic or orphan body that owns their arbiter
@@ -660,7 +684,7 @@ cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int threadCount) 
     cdef cpArray *arbiters
     cdef cpArray *constraints
     cdef cpFloat dv, dvsq, keThreshold
-    cdef int i, count
+    cdef int i, count, outside
     cdef cpBody *body
     cdef cpBody *a
     cdef cpBody *b
@@ -728,7 +752,7 @@ cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int threadCount) 
             # time stays 0, and aborts on deactivating it; above 0 the
             # component is always active, so skipping it changes nothing.)
             if ComponentRoot(body) == NULL and cpBodyGetType(body) == CP_BODY_TYPE_DYNAMIC:
-                FloodFillComponent(body, body)
+                outside = FloodFillComponent(body, body)
                 if not ComponentActive(body, space.sleepTimeThreshold):
                     cpArrayPush(space.sleepingComponents, body)
                     other = body
@@ -737,6 +761,8 @@ cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int threadCount) 
                         other = other.sleeping.next
                     # Deactivation swap-removed this body: same index again.
                     continue
+                if outside:
+                    _settleOutsideMembers(body, space)
             i += 1
             # Only sleeping bodies keep their component links.
             body.sleeping.root = NULL

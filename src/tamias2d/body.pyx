@@ -296,13 +296,14 @@ cdef void cpBodyApplyImpulseAtLocalPoint(cpBody *body, cpVect impulse, cpVect po
 # -- cpSpaceComponent.c, body side ----------------------------------------------------
 
 # A body outside every space is reached by the flood fill through its joints
-# and takes the root of the component it joins. The step resets the links of
-# the bodies in its array only, so when that component stays awake the body
-# keeps its root (Munk2D too; the flood fill then passes the body over, which
-# the chipmunk solver keeps, bit for bit). The root may later be awake, part
-# of another component or freed. It is followed only while it is still the
-# root of a sleeping component of a space the body is jointed into, which
-# keeps Munk2D's waking of it and never reads a freed body.
+# and joins the component of the bodies it is jointed to. If that component
+# falls asleep the body is one of its chain and its root is the component's.
+# If it stays awake the body keeps a root (itself, see _settleOutsideMembers
+# in _space_step.pyx): Munk2D keeps the component's root there, which may
+# later be awake, in another component or freed, and the flood fill passes
+# the body over from then on. Such a stale root is never followed: waking
+# the body wakes instead what it is jointed to that sleeps, which is what
+# Munk2D's root stood for (the component it had joined).
 cdef cpBool _rootStillSleeps(cpBody *body, cpBody *root) noexcept nogil:
     cdef cpConstraint *c = body.constraintList
     while c != NULL:
@@ -310,6 +311,32 @@ cdef cpBool _rootStillSleeps(cpBody *body, cpBody *root) noexcept nogil:
             return 1
         c = cpConstraintNext(c, body)
     return 0
+
+
+cdef void _wakeJointPartners(cpBody *body) noexcept nogil:
+    cdef cpConstraint *c = body.constraintList
+    cdef cpBody *other
+    while c != NULL:
+        other = c.b if c.a == body else c.a
+        # Only partners in a space: no recursion into another outside body.
+        if c.space != NULL and other.space != NULL and cpBodyIsSleeping(other):
+            cpBodyActivate(other)
+        c = cpConstraintNext(c, body)
+
+
+cdef void tamias_body_drop_stale_root(cpBody *body) noexcept nogil:
+    # Once the body is jointed into no space the flood fill cannot reach it
+    # and its root means nothing: it stops counting as asleep.
+    cdef cpConstraint *c
+    if body.space != NULL or body.sleeping.root == NULL:
+        return
+    c = body.constraintList
+    while c != NULL:
+        if c.space != NULL:
+            return
+        c = cpConstraintNext(c, body)
+    body.sleeping.root = NULL
+    body.sleeping.next = NULL
 
 
 cdef void cpBodyActivate(cpBody *body) noexcept nogil:
@@ -322,9 +349,10 @@ cdef void cpBodyActivate(cpBody *body) noexcept nogil:
 
     root = body.sleeping.root
     if root != NULL and body.space == NULL and not _rootStillSleeps(body, root):
-        # A stale root (see _rootStillSleeps): nothing to wake, and it may
-        # have been freed.
+        # A stale root (see _rootStillSleeps).
         root = NULL
+        _wakeJointPartners(body)
+        tamias_body_drop_stale_root(body)
     if root != NULL and cpBodyIsSleeping(root):
         if _hooks.wake_component != NULL:
             _hooks.wake_component(root.space, root)
@@ -931,6 +959,12 @@ cdef class Body:
             # stale arbiter stays in their lists). Wake them first.
             cpBodyActivateStatic(&self._body, NULL)
         cpBodySetType(&self._body, <cpBodyType>t)
+        if t != CP_BODY_TYPE_DYNAMIC and self._body.space == NULL:
+            # A body outside the space keeps a stale component root from the
+            # flood fill (see _rootStillSleeps); a kinematic or static body
+            # is never part of a component.
+            self._body.sleeping.root = NULL
+            self._body.sleeping.next = NULL
 
     @property
     def space(self):

@@ -64,7 +64,7 @@ from tamias2d.arbiter cimport (Arbiter, arbiter_wrap, cpArbiterInit, cpArbiterUp
     cpArbiterPreStep, cpArbiterApplyCachedImpulse, cpArbiterApplyImpulse,
     cpArbiterUnthread, cpCollisionHandlerDoNothing, cpCollisionDoNothing,
     cpArbiterThreadForBody, cpArbiterNext)
-from tamias2d.body cimport cpBodyRemoveConstraint
+from tamias2d.body cimport cpBodyRemoveConstraint, tamias_body_drop_stale_root
 from tamias2d._pickle cimport snapshot_module as _snapshot
 from tamias2d.constraints cimport (Constraint, tamias_constraint_detach,
     tamias_space_detach_constraints, tamias_check_constraints, tamias_constraint_debug_draw,
@@ -438,6 +438,10 @@ cdef void cpSpaceRemoveConstraint(cpSpace *space, cpConstraint *constraint) noex
     cpBodyRemoveConstraint(constraint.a, constraint)
     cpBodyRemoveConstraint(constraint.b, constraint)
     constraint.space = NULL
+    # Waking above followed the roots that still sleep; a body outside the
+    # space that this joint held keeps a stale one (body.pyx).
+    tamias_body_drop_stale_root(constraint.a)
+    tamias_body_drop_stale_root(constraint.b)
 
 
 # -- iteration ----------------------------------------------------------------------------
