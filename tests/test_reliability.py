@@ -535,6 +535,60 @@ def test_the_check_costs_nothing_in_numbers():
     assert run(tamias2d) == run(pymunk)
 
 
+# -- found by the sleeping mode of tests/test_fuzz.py ----------------------------------------
+# A joint belongs to its body a, or to its body b when a is static: the
+# owner's sleeping takes the joint out of the solver, waking puts it back.
+
+@isolated(timeout=60)
+def test_a_static_body_turned_dynamic_keeps_its_joint_to_a_sleeping_body():
+    # The joint was the sleeping body's; turned dynamic, the static body
+    # owns it, and waking the other body no longer put it back: the joint
+    # was lost for good (pymunk too, and it segfaults when the space is freed).
+    s = Space()
+    s.sleep_time_threshold = 0.5
+    st = Body(body_type=Body.STATIC)
+    b = Body(1, 10)
+    b.position = (0, -5)
+    s.add(st, Circle(st, 1), b, Circle(b, 1), PinJoint(st, b))
+    for _ in range(10):
+        s.step(0.1)
+    assert b.is_sleeping
+    st.body_type = Body.DYNAMIC
+    st.mass, st.moment = 1, 10
+    st.velocity = (10, 0)
+    assert not b.is_sleeping
+    for _ in range(40):
+        s.step(0.05)
+        sound(s)
+    assert (st.position - b.position).length == pytest.approx(5.0, abs=0.2)
+    copy.deepcopy(s)
+
+
+@isolated(timeout=60)
+def test_a_body_turned_static_hands_its_joint_to_a_sleeping_body_once():
+    # The joint was the awake body's and stayed in the solver; turned static,
+    # it belongs to the sleeping body, whose waking pushed it a second time
+    # (the copy refused the space; freeing it looped; pymunk segfaults).
+    s = Space()
+    s.sleep_time_threshold = 0.5
+    a = Body(1, 10)
+    b = Body(1, 10)
+    b.position = (0, -5)
+    j = PinJoint(a, b)
+    s.add(a, Circle(a, 1), b, Circle(b, 1), j)
+    s.step(0.1)
+    b.sleep()
+    a.body_type = Body.STATIC
+    s.step(0.1)
+    b.activate()
+    s.step(0.1)
+    copy.deepcopy(s)
+    s.remove(j)
+    for _ in range(3):
+        s.step(0.1)
+    del s      # freeing the space must end
+
+
 def test_a_body_outside_the_space_turned_kinematic_does_not_sleep():
     s = Space()
     s.sleep_time_threshold = 0.05

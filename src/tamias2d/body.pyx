@@ -324,6 +324,20 @@ cdef void _wakeJointPartners(cpBody *body) noexcept nogil:
         c = cpConstraintNext(c, body)
 
 
+# A joint belongs to its body a, or to its body b when a is static: the owner's
+# sleeping takes it out of the solver and waking puts it back. A body a that
+# turns static or stops being static hands its joints over; a sleeping body b
+# is woken first, so that the joint is in the solver exactly while its new
+# owner is awake (else it was lost for good or, woken later, pushed twice:
+# Munk2D and pymunk).
+cdef void _wakeJointsChangingOwner(cpBody *body) noexcept nogil:
+    cdef cpConstraint *c = body.constraintList
+    while c != NULL:
+        if c.a == body and c.space != NULL and cpBodyIsSleeping(c.b):
+            cpBodyActivate(c.b)
+        c = cpConstraintNext(c, body)
+
+
 cdef void tamias_body_drop_stale_root(cpBody *body) noexcept nogil:
     # Once the body is jointed into no space the flood fill cannot reach it
     # and its root means nothing: it stops counting as asleep.
@@ -958,6 +972,8 @@ cdef class Body:
             # has the call to cpBodyActivateStatic here commented out; a
             # stale arbiter stays in their lists). Wake them first.
             cpBodyActivateStatic(&self._body, NULL)
+        if (t == CP_BODY_TYPE_STATIC) != (cpBodyGetType(&self._body) == CP_BODY_TYPE_STATIC):
+            _wakeJointsChangingOwner(&self._body)
         cpBodySetType(&self._body, <cpBodyType>t)
         if t != CP_BODY_TYPE_DYNAMIC and self._body.space == NULL:
             # A body outside the space keeps a stale component root from the
