@@ -849,8 +849,10 @@ cdef void _hookSleepWithGroup(cpBody *body, cpBody *group) noexcept nogil:
             # to the pool) at once, threaded until the next step unthreads
             # them. A sleeping body would keep it threaded while the pool hands
             # it to another pair (pymunk hangs). The next step unthreads it
-            # anyway if the body stays awake; here it goes now.
+            # and drops it from the step's array anyway if the body stays
+            # awake; here both happen now.
             cpArbiterUnthread(arb)
+            cpArrayDeleteObj(space.arbiters, arb)
         elif (cpBodyGetType(other) != CP_BODY_TYPE_STATIC
                 and (groupRoot == NULL or other.sleeping.root != groupRoot)):
             if cpBodyIsSleeping(other):
