@@ -1108,10 +1108,10 @@ cdef int _read_space(Reader *r, Parsed *p) except -1:
         _bad(f"gravity ({s.gx}, {s.gy}) is not finite or beyond 1e150")
     if not (_fin(s.damping) and s.damping >= 0.0):
         _bad(f"damping {s.damping} is not a finite number >= 0")
-    if s.idleSpeedThreshold != s.idleSpeedThreshold:
-        _bad("idle_speed_threshold is NaN")
-    if s.sleepTimeThreshold != s.sleepTimeThreshold:
-        _bad("sleep_time_threshold is NaN")
+    if not (s.idleSpeedThreshold >= 0.0):
+        _bad(f"idle_speed_threshold {s.idleSpeedThreshold} is not a number >= 0")
+    if not (s.sleepTimeThreshold >= 0.0):
+        _bad(f"sleep_time_threshold {s.sleepTimeThreshold} is not a number >= 0")
     if not _fin(s.collisionSlop):
         _bad(f"collision_slop {s.collisionSlop} is not finite")
     # 1 - pow(bias, dt) is the contacts' bias coefficient: NaN for a

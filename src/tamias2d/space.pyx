@@ -1289,6 +1289,11 @@ cdef class Space:
     def collision_persistence(self):
         """Steps an arbiter is kept after its shapes separate (default 3).
 
+        At 0, as in pymunk, the arbiters expire in the step that finds them,
+        before the solver runs: contacts are reported (``begin`` at every
+        step, ``separate`` never) but not solved, and shapes pass through
+        each other.
+
         >>> import tamias2d
         >>> tamias2d.Space().collision_persistence
         3
