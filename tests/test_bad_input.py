@@ -503,6 +503,92 @@ def test_collision_slop_minus_infinity_is_refused_or_harmless():
         assert finite(*body_state(b))
 
 
+@isolated(timeout=60)
+def test_collision_bias_takes_a_finite_fraction():
+    # Bug (fixed in space.pyx): the setter took anything. A step corrects
+    # 1 - bias**dt of the overlap, which is NaN for a NaN or negative bias and
+    # -inf for an infinite one: every contact's bias velocity NaN (pymunk
+    # too). Above 1 the correction pushes shapes into each other, but
+    # pymunk's own copy test sets 9, so it is accepted.
+    s, bodies = small_scene()
+    for good in (0.0, 0.0017970074436457143, 0.5, 1.0, 9.0):
+        s.collision_bias = good
+        assert s.collision_bias == good
+    s.collision_bias = 0.25
+    for bad in (nan, inf, -inf, -0.5, -5e-324):
+        with pytest.raises(ValueError) as exc:
+            s.collision_bias = bad
+        assert "collision_bias" in str(exc.value) and repr(bad) in str(exc.value)
+        assert s.collision_bias == 0.25
+    assert_usable(s)
+
+
+@isolated(timeout=60)
+def test_sleep_and_idle_thresholds_refuse_negative_and_nan():
+    # A time or a speed below 0 has no meaning (pymunk takes them: a negative
+    # idle speed is squared, a negative time sleeps everything at once, like
+    # 0). inf is meaningful for both: sleeping off; every body idle.
+    s, bodies = small_scene()
+    for attr, goods in (("sleep_time_threshold", (0.0, 5e-324, 0.5, 7.0, inf)),
+                        ("idle_speed_threshold", (0.0, 4.0, 1e300, inf))):
+        for good in goods:
+            setattr(s, attr, good)
+            assert getattr(s, attr) == good
+        setattr(s, attr, 0.5)
+        for bad in (nan, -inf, -1.0, -5e-324):
+            with pytest.raises(ValueError) as exc:
+                setattr(s, attr, bad)
+            assert attr in str(exc.value) and repr(bad) in str(exc.value)
+            assert getattr(s, attr) == 0.5
+    assert_usable(s)
+
+
+@isolated(timeout=60)
+def test_float_setters_refuse_what_has_no_meaning_and_take_what_programs_use():
+    # The audit of every float parameter of Space, Body, shapes and joints,
+    # as a table: what each refuses (a clear exception, the value unchanged)
+    # and what it must keep taking because pymunk programs (or pymunk's own
+    # tests) use it.
+    from tamias2d import constraints as C
+    a, b = Body(1, 10), Body(1, 10)
+    joint_kinds = [C.PinJoint(a, b), C.SlideJoint(a, b, (0, 0), (0, 0), 0, 1),
+                   C.PivotJoint(a, b, (0, 0)), C.GrooveJoint(a, b, (0, 0), (1, 0), (0, 0)),
+                   C.DampedSpring(a, b, (0, 0), (0, 0), 1, 1, 1),
+                   C.DampedRotarySpring(a, b, 0, 1, 1), C.RotaryLimitJoint(a, b, 0, 1),
+                   C.RatchetJoint(a, b, 0, 1), C.GearJoint(a, b, 0, 1), C.SimpleMotor(a, b, 1)]
+    shapes = [Circle(a, 1), Segment(a, (0, 0), (1, 0), 1), Poly.create_box(a)]
+    table = [
+        (Space(), "damping", (nan, inf, -inf, -1.0), (0.0, 0.5, 1.0, 5.0)),
+        (Space(), "collision_slop", (nan, inf, -inf), (0.0, 0.1, 8.0)),
+        (Space(), "collision_bias", (nan, inf, -inf, -1.0), (0.0, 0.2, 1.0, 9.0)),
+        (Space(), "sleep_time_threshold", (nan, -inf, -1.0), (0.0, 0.5, inf)),
+        (Space(), "idle_speed_threshold", (nan, -inf, -1.0), (0.0, 6.0, inf)),
+        (Body(1, 1), "mass", (nan, inf, -inf, -1.0), (0.5, 1e6)),
+        (Body(1, 1), "moment", (nan, -inf, -1.0), (0.5, inf)),
+        (Body(1, 1), "angle", (nan, inf, -inf), (-10.0, 100.0)),
+        (Body(1, 1), "angular_velocity", (nan, inf, -inf), (-10.0, 1e6)),
+        (Body(1, 1), "torque", (nan, inf, -inf), (-10.0, 1e6)),
+    ]
+    for sh in shapes:
+        table += [(sh, "friction", (nan, inf, -inf, -1.0), (0.0, 0.7, 2.0)),
+                  (sh, "elasticity", (nan, inf, -inf, -1.0), (0.0, 1.0, 1.5)),
+                  (sh, "density", (nan, inf, -inf, -1.0), (0.0, 2.0)),
+                  (sh, "mass", (nan, inf, -inf, -1.0), (0.0, 2.0))]
+    for j in joint_kinds:
+        table += [(j, "max_force", (nan, -inf, -1.0), (0.0, 1e5, inf)),
+                  (j, "max_bias", (nan, -inf, -1.0), (0.0, 1e5, inf)),
+                  (j, "error_bias", (nan, inf, -inf, -0.5), (0.0, 0.2, 3.0))]
+    for obj, attr, bads, goods in table:
+        for good in goods:
+            setattr(obj, attr, good)
+            assert getattr(obj, attr) == good, (obj, attr, good)
+        before = getattr(obj, attr)
+        for bad in bads:
+            with pytest.raises(CLEAR):
+                setattr(obj, attr, bad)
+            assert same(getattr(obj, attr), before), (obj, attr, bad)
+
+
 @prop
 @given(dt=any_value)
 def test_step_with_any_dt(dt):

@@ -20,6 +20,13 @@ CI runs 6 seeds x 6,000 operations (about 10 s); TAMIAS2D_FULL=1 runs 20
 seeds x 20,000. TAMIAS2D_SEED=S picks the first seed. The driver's
 --check-every-op checks the contact graph after every operation instead of
 after every step.
+
+``--mode sleep`` (SleepFuzzer) narrows the mix to sleeping: thresholds from 0
+up, a collision persistence of 0, kinematic bodies, joints to bodies in the
+space, outside it and to the static body, sleep / activate /
+sleep_with_group, and copies of the space stepped on; every body the space
+can move must stay finite, no kinematic body may sleep. CI runs 4 seeds x
+6,000 operations of it (about 8 s), TAMIAS2D_FULL=1 20 x 20,000.
 """
 import argparse
 import math
@@ -589,11 +596,173 @@ class Fuzzer:
         self.check()
 
 
+
+class SleepFuzzer(Fuzzer):
+    """The sleeping mode (--mode sleep): fewer, mostly sensible operations,
+    with sleeping on at thresholds from 0 up, a collision persistence of 0
+    now and then, kinematic bodies, joints (to bodies in the space, outside
+    it and to the static body) added and removed, sleep / activate /
+    sleep_with_group, and copies (copy, deepcopy, pickle) of the space, each
+    stepped on and checked. After every step every body the space can move
+    (static, kinematic, outside it by a joint) must be finite, and the
+    contact graph sound. This mode found the bugs of tests/test_reliability.py
+    again, from scratch, before their fixes."""
+
+    THRESHOLDS = [0.0, 0.0, 1e-9, 0.05, 0.5, math.inf]
+
+    def __init__(self, mod, seed, log):
+        super().__init__(mod, seed, log)
+        self.joints = []
+        self.copies = 0
+        self.space.sleep_time_threshold = self.r.choice(self.THRESHOLDS[:-1])
+        self.ops = [
+            (6, self.new_body), (8, self.new_shape), (8, self.add), (4, self.remove),
+            (4, self.set_body), (2, self.set_shape), (3, self.set_space), (3, self.push),
+            (20, self.step), (2, self.query), (1, self.handlers), (1, self.post_step),
+            (2, self.body_type), (8, self.sleep), (5, self.joint), (3, self.remove_joint),
+            (3, self.copy_space), (1, self.forget),
+        ]
+        self.weights = [w for w, _ in self.ops]
+
+    def new_body(self):
+        m = self.mod
+        r = self.r
+        kind = r.choice(["dynamic"] * 5 + ["kinematic"] * 2 + ["static"])
+        if kind == "dynamic":
+            b = m.Body(r.choice([0.5, 1.0, 5.0]), r.choice([1.0, 10.0, 100.0]))
+        else:
+            b = m.Body(body_type=m.Body.KINEMATIC if kind == "kinematic" else m.Body.STATIC)
+        b.position = r.uniform(-200, 200), r.uniform(-250, 100)
+        if kind != "static" and r.random() < 0.6:
+            b.velocity = r.uniform(-50, 50), r.uniform(-50, 50)
+        self.note(f"  Body({kind}) at {tuple(b.position)!r}")
+        self.bodies.append(b)
+        self.note(f"  -> {self.label(b)}")
+
+    def set_space(self):
+        r = self.r
+        attr = r.choice(["sleep_time_threshold"] * 3 + ["collision_persistence"] * 2
+                        + ["gravity", "idle_speed_threshold", "iterations"])
+        value = {"sleep_time_threshold": lambda: r.choice(self.THRESHOLDS),
+                 "collision_persistence": lambda: r.choice([0, 0, 1, 3]),
+                 "gravity": lambda: r.choice([(0, -300), (0, 0), (30, -100)]),
+                 "idle_speed_threshold": lambda: r.choice([0.0, 1.0, 10.0]),
+                 "iterations": lambda: r.choice([1, 10, 20])}[attr]()
+        self.note(f"  space.{attr} = {value!r}")
+        self.attempt(setattr, self.space, attr, value)
+
+    def sleep(self):
+        b = self.pick(self.bodies)
+        if b is None:
+            return
+        which = self.r.choice(["sleep", "activate", "activate", "sleep_with_group", "threshold"])
+        if which == "sleep":
+            self.note(f"  {self.label(b)}.sleep()")
+            self.attempt(b.sleep)
+        elif which == "activate":
+            self.note(f"  {self.label(b)}.activate()")
+            self.attempt(b.activate)
+        elif which == "sleep_with_group":
+            other = self.pick(self.bodies)
+            self.note(f"  {self.label(b)}.sleep_with_group({self.label(other)})")
+            self.attempt(b.sleep_with_group, other)
+        else:
+            value = self.r.choice(self.THRESHOLDS)
+            self.note(f"  space.sleep_time_threshold = {value}")
+            self.attempt(setattr, self.space, "sleep_time_threshold", value)
+
+    def joint(self):
+        m = self.mod
+        r = self.r
+        if not self.bodies:
+            return
+        a = r.choice(self.bodies)
+        b = r.choice(self.bodies + [self.space.static_body] * 2)
+        kind = r.choice(["PinJoint", "PivotJoint", "SlideJoint", "DampedSpring", "GearJoint",
+                         "SimpleMotor", "RotaryLimitJoint"])
+        args = {"PinJoint": (), "PivotJoint": ((a.position + b.position) / 2,),
+                "SlideJoint": ((0, 0), (0, 0), 0.0, r.uniform(5, 50)),
+                "DampedSpring": ((0, 0), (0, 0), r.uniform(5, 50), 100.0, 5.0),
+                "GearJoint": (0.0, r.choice([1.0, 2.0, -1.0])), "SimpleMotor": (1.0,),
+                "RotaryLimitJoint": (-1.0, 1.0)}[kind]
+        self.note(f"  {kind}({self.label(a)}, {self.label(b)})")
+        j = self.attempt(getattr(m, kind), a, b, *args)
+        if j is None:
+            return
+        if r.random() < 0.3:
+            j.max_force = r.choice([1e3, 1e5])
+        self.note(f"  add joint {kind}")
+        self.attempt(self.space.add, j)
+        self.joints.append(j)
+
+    def remove_joint(self):
+        j = self.pick(self.joints)
+        if j is None:
+            return
+        self.note(f"  remove joint {type(j).__name__}({self.label(j.a)}, {self.label(j.b)})")
+        self.attempt(self.space.remove, j)
+        if self.r.random() < 0.5:
+            self.joints.remove(j)
+
+    def copy_space(self):
+        import copy
+        import pickle
+        how = self.r.choice(["copy", "deepcopy", "pickle"])
+        self.note(f"  {how} of the space")
+        try:
+            clone = {"copy": lambda s: s.copy(), "deepcopy": copy.deepcopy,
+                     "pickle": lambda s: pickle.loads(pickle.dumps(s))}[how](self.space)
+        except self.mod.errors.CopyError as e:
+            # A copy is refused only for numbers grown past what a restore
+            # accepts (docs/stability.md, Snapshots).
+            if not any(k in str(e) for k in ("beyond 1e150", "would overflow", "1e150 away")):
+                raise InvariantBroken(f"{how} refused: {e}")
+            self.expected_errors += 1
+            return
+        except (pickle.PicklingError, AttributeError, TypeError) as e:
+            if how != "pickle" or "pickle" not in str(e):
+                raise
+            self.expected_errors += 1   # the callbacks made here are local functions
+            return
+        self.copies += 1
+        problem = clone._contact_graph_problem()
+        if problem:
+            raise InvariantBroken(f"contact graph of the {how}: {problem}")
+        for _ in range(2):
+            try:
+                clone.step(1 / 60)
+            except self.clear + (Boom,):
+                pass
+            problem = clone._contact_graph_problem()
+            if problem:
+                raise InvariantBroken(f"contact graph of the {how} after a step: {problem}")
+
+    def check(self):
+        super().check()
+        s = self.space
+        movable = list(s.bodies) + [s.static_body]
+        for j in s.constraints:
+            movable += [j.a, j.b]
+        for b in movable:
+            st = (*b.position, b.angle, *b.velocity, b.angular_velocity)
+            if not all(map(math.isfinite, st)):
+                raise InvariantBroken(f"{b} (space: {b.space is s}) is not finite: {st}")
+            if b.body_type == self.mod.Body.KINEMATIC and b.is_sleeping:
+                raise InvariantBroken(f"kinematic {b} sleeps")
+        joints = set(s.constraints)
+        for b in self.bodies:
+            if b.space is None and b.is_sleeping and not any(j in joints for j in b.constraints):
+                raise InvariantBroken(f"{b}, outside every space and jointed to none, sleeps")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description="tamias2d fuzz driver")
     ap.add_argument("--seed", type=int, default=SEED0)
     ap.add_argument("--ops", type=int, default=2500)
     ap.add_argument("--log", help="operation log (default: stdout)")
+    ap.add_argument("--mode", choices=["all", "sleep"], default="all",
+                    help="all: every operation (the default); sleep: sleeping, joints, "
+                         "persistence 0 and copies (SleepFuzzer)")
     ap.add_argument("--check-every-op", action="store_true",
                     help="check the contact graph after every operation, not only after steps "
                          "(slower; names the operation that broke it)")
@@ -601,7 +770,7 @@ def main(argv=None):
     sys.path.insert(0, ROOT)
     import tamias2d
     log = open(args.log, "w") if args.log else sys.stdout
-    fz = Fuzzer(tamias2d, args.seed, log)
+    fz = (SleepFuzzer if args.mode == "sleep" else Fuzzer)(tamias2d, args.seed, log)
 
     def check_graph(i, name):
         problem = fz.space._contact_graph_problem()
@@ -616,7 +785,7 @@ def main(argv=None):
         traceback.print_exc()
         return 3
     summary = (f"seed {args.seed}: {args.ops} operations, {fz.expected_errors} refused as expected, "
-               f"{fz.overflows} overflowed steps, "
+               f"{fz.overflows} overflowed steps, {getattr(fz, 'copies', 0)} copies stepped, "
                f"{len(fz.space.bodies)} bodies and {len(fz.space.shapes)} shapes at the end; "
                f"{sorted(fz.counts.items())}")
     log.write(summary + "\n")
@@ -626,11 +795,11 @@ def main(argv=None):
 
 # -- the pytest side -------------------------------------------------------------------------
 
-def _run_driver(seed, ops, tmp_path, timeout):
-    log = tmp_path / f"fuzz-{seed}.log"
+def _run_driver(seed, ops, tmp_path, timeout, mode="all"):
+    log = tmp_path / f"fuzz-{mode}-{seed}.log"
     cmd = [sys.executable, "-X", "faulthandler", os.path.abspath(__file__), "--seed", str(seed),
-           "--ops", str(ops), "--log", str(log)]
-    replay = f"python tests/test_fuzz.py --seed {seed} --ops {ops}"
+           "--ops", str(ops), "--log", str(log), "--mode", mode]
+    replay = f"python tests/test_fuzz.py --seed {seed} --ops {ops} --mode {mode}"
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, cwd=ROOT)
     except subprocess.TimeoutExpired as exc:
@@ -640,9 +809,9 @@ def _run_driver(seed, ops, tmp_path, timeout):
     return proc, None, tail, replay, proc.stderr
 
 
-def _check_run(seed, ops, tmp_path, timeout):
+def _check_run(seed, ops, tmp_path, timeout, mode="all"):
     import pytest
-    proc, problem, tail, replay, stderr = _run_driver(seed, ops, tmp_path, timeout)
+    proc, problem, tail, replay, stderr = _run_driver(seed, ops, tmp_path, timeout, mode)
     if problem is None:
         if proc.returncode < 0:
             problem = f"crash: killed by signal {-proc.returncode}"
@@ -669,6 +838,23 @@ def _params():
 def test_fuzz(seed, tmp_path):
     out = _check_run(seed, OPS, tmp_path, timeout=900 if FULL else 120)
     assert f"{OPS} operations" in out, out
+
+
+SLEEP_SEEDS = list(range(SEED0 + 500, SEED0 + 500 + (20 if FULL else 4)))
+SLEEP_OPS = 20_000 if FULL else 6_000
+
+
+def _sleep_params():
+    import pytest
+    return pytest.mark.parametrize("seed", SLEEP_SEEDS)
+
+
+@_sleep_params()
+def test_fuzz_sleeping(seed, tmp_path):
+    # The sleeping mode: thresholds from 0, persistence 0, kinematic bodies,
+    # joints (also to bodies outside the space), copies stepped on.
+    out = _check_run(seed, SLEEP_OPS, tmp_path, timeout=900 if FULL else 120, mode="sleep")
+    assert f"{SLEEP_OPS} operations" in out, out
 
 
 def test_the_harness_reports_a_crash(tmp_path):

@@ -607,19 +607,6 @@ def _step(space, n, note):
     return True
 
 
-KINEMATIC_ASLEEP = ("the step put a kinematic body to sleep (sleep_time_threshold <= 0; "
-                    "the same through the API, see docs/stability.md)")
-
-
-def _kinematic_put_to_sleep(space, problem):
-    # A step bug, not a snapshot one: with a sleep time threshold of 0 or
-    # less, cpSpaceProcessComponents finds a kinematic body's "component"
-    # idle and deactivates it (Munk2D and pymunk do the same); its shapes
-    # land in the static index. A space built through the API does it too.
-    return (space.sleep_time_threshold <= 0.0 and "is in the static index" in problem
-            and any(b.body_type == tamias2d.Body.KINEMATIC for b in space.bodies))
-
-
 def run_trial(data, stream=False):
     """Unpickle, step, copy, free. Returns (outcome, detail). `stream`: the
     pickle stream itself was mutated, and pickle may also fail to find a
@@ -637,8 +624,6 @@ def run_trial(data, stream=False):
     clean = _step(space, STEPS, note)
     if clean:
         problem = space._contact_graph_problem()
-        if problem and _kinematic_put_to_sleep(space, problem):
-            return "engine-issue", f"{KINEMATIC_ASLEEP}: {problem}"
         if problem:
             raise TrialFailure(f"contact graph after {STEPS} steps: {problem}")
         # Wake everything (sleeping contacts go back to the buffers, shapes
@@ -697,7 +682,7 @@ class Figures:
     def add(self, scene, outcome, detail):
         self.counts[outcome] += 1
         self.by_scene[scene][outcome] += 1
-        if outcome in ("refused", "step-refused", "engine-issue", "grew"):
+        if outcome in ("refused", "step-refused", "grew"):
             self.messages[(outcome, _gist(detail))] += 1
 
     def summary(self):
@@ -706,7 +691,6 @@ class Figures:
         return (f"{total} trials: {c['refused']} refused at restore, {c['ran']} restored and "
                 f"ran {STEPS} steps + copies, {c['step-refused']} restored then refused by a "
                 f"step, {c['grew']} ran but grew past the magnitudes a copy accepts, "
-                f"{c['engine-issue']} restored then met the known kinematic-sleep step bug, "
                 f"{c['skipped']} mutations not picklable, {len(self.failures)} failures")
 
 

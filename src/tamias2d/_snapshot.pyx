@@ -1109,10 +1109,10 @@ cdef int _read_space(Reader *r, Parsed *p) except -1:
         _bad(f"gravity ({s.gx}, {s.gy}) is not finite or beyond 1e150")
     if not (_fin(s.damping) and s.damping >= 0.0):
         _bad(f"damping {s.damping} is not a finite number >= 0")
-    if s.idleSpeedThreshold != s.idleSpeedThreshold:
-        _bad("idle_speed_threshold is NaN")
-    if s.sleepTimeThreshold != s.sleepTimeThreshold:
-        _bad("sleep_time_threshold is NaN")
+    if not (s.idleSpeedThreshold >= 0.0):
+        _bad(f"idle_speed_threshold {s.idleSpeedThreshold} is not a number >= 0")
+    if not (s.sleepTimeThreshold >= 0.0):
+        _bad(f"sleep_time_threshold {s.sleepTimeThreshold} is not a number >= 0")
     if not _fin(s.collisionSlop):
         _bad(f"collision_slop {s.collisionSlop} is not finite")
     # 1 - pow(bias, dt) is the contacts' bias coefficient: NaN for a
@@ -1954,8 +1954,9 @@ cdef int _read_body_arrays(Reader *r, Parsed *p) except -1:
 #   dynamic bodies with a valid mass that name it as root; no chain runs
 #   into another or loops;
 # * a body outside the space whose root is stale (a joint's body the flood
-#   fill met once) points at an awake body or a listed root: waking it from
-#   a body that sleeps but is no root would wake half a component.
+#   fill met once) points at itself (what the step leaves), an awake body or
+#   a listed root (what older versions left): waking it from a body that
+#   sleeps but is no root would wake half a component.
 cdef int _check_components(Parsed *p) except -1:
     cdef Py_ssize_t n_in = p.s.nspace_bodies + p.s.has_static
     cdef int32_t k, i, root, cur
@@ -2027,7 +2028,9 @@ cdef int _check_components(Parsed *p) except -1:
             _bad(f"body {i} is in the space but in none of its body arrays or sleeping "
                  f"components")
         root = p.bodies[i].root
-        if root >= 0 and p.bodies[root].root >= 0 and not (
+        # (A root naming the body itself is the engine's stale root, see
+        # _settleOutsideMembers in _space_step.pyx.)
+        if root >= 0 and root != i and p.bodies[root].root >= 0 and not (
                 p.role[root] == ROLE_ASLEEP and p.comp[root] == root):
             _bad(f"body {i} (outside the space) names body {root} as its sleeping root, which "
                  f"sleeps but is not a component's root")

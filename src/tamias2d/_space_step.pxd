@@ -80,12 +80,16 @@ cdef inline bint _bodyNonFinite(cpBody *body) noexcept nogil:
             - body.v.y + body.a - body.a + body.w - body.w) != 0.0
 
 cdef cpBody *_firstNonFiniteBody(cpArray *bodies) noexcept nogil
+# The first non-finite body among all a step can change but orphans (see the
+# definition); NULL if none.
+cdef cpBody *tamias_first_non_finite_body(cpSpace *space) noexcept nogil
 # After a step that overflowed, drop the non-finite warm-start impulses.
 cdef void _forgetNonFiniteImpulses(cpSpace *space) noexcept nogil
 
 cdef struct OrphanScan:
     cpSpace *space
     cpBody *bad      # the first orphan whose mass or moment cannot be inverted
+    cpBody *nonFinite  # the first orphan with a non-finite state
     int orphans      # shapes seen whose body is an orphan (see _orphanBody)
 
 # A spatial-index iterator filling an OrphanScan.

@@ -21,7 +21,8 @@ from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, 
     CP_ARBITER_STATE_FIRST_COLLISION, CP_ARBITER_STATE_NORMAL,
     CP_ARBITER_STATE_IGNORE, CP_ARBITER_STATE_CACHED)
 from tamias2d._containers cimport (cpcalloc, cpfree, cpArrayPush, cpArrayPop,
-    cpArrayDeleteObj, cpArrayContains, cpHashSetInsert, cpHashSetEach, cpHashSetFilter)
+    cpArrayDeleteObj, cpArrayContains, cpHashSetInsert, cpHashSetFind, cpHashSetEach,
+    cpHashSetFilter)
 from tamias2d._spatialindex cimport (cpSpatialIndexEach, cpSpatialIndexInsert, cpSpatialIndexRemove,
     cpSpatialIndexReindexQuery)
 from tamias2d.vector cimport cpVect, cpBB, cpvsub, cpvlengthsq, cpBBIntersects
@@ -520,7 +521,13 @@ cdef void cpSpaceActivateBody(cpSpace *space, cpBody *body) noexcept nogil:
             cpfree(contacts)
         arb = cpArbiterNext(arb, body)
 
-    constraint = body.constraintList
+    _pushOwnedConstraints(space, body)
+
+# The joints a body owns (it is their body a, or their body a is static) go
+# back into the solver's array as the body wakes.
+cdef void _pushOwnedConstraints(cpSpace *space, cpBody *body) noexcept nogil:
+    cdef cpConstraint *constraint = body.constraintList
+    cdef cpBody *bodyA
     while constraint != NULL:
         bodyA = constraint.a
         if body == bodyA or cpBodyGetType(bodyA) == CP_BODY_TYPE_STATIC:
@@ -582,25 +589,91 @@ cdef inline void ComponentAdd(cpBody *root, cpBody *body) noexcept nogil:
         body.sleeping.next = root.sleeping.next
         root.sleeping.next = body
 
-cdef void FloodFillComponent(cpBody *root, cpBody *body) noexcept nogil:
+cdef int FloodFillComponent(cpBody *root, cpBody *body) noexcept nogil:
     # Kinematic bodies never sleep and keep what they touch awake; static
     # bodies are asleep all the time; orphans (see _orphanBody) are left out.
-    # Recursive as in Munk2D.
+    # Recursive as in Munk2D. Returns how many bodies outside the space
+    # (held by joints) joined the component.
     cdef cpBody *other_root
     cdef cpArbiter *arb
     cdef cpConstraint *constraint
+    cdef int outside = 0
     if cpBodyGetType(body) == CP_BODY_TYPE_DYNAMIC and not _orphanBody(body, root.space):
         other_root = ComponentRoot(body)
         if other_root == NULL:
             ComponentAdd(root, body)
+            if body.space != root.space:
+                outside = 1
             arb = body.arbiterList
             while arb != NULL:
-                FloodFillComponent(root, arb.body_b if body == arb.body_a else arb.body_a)
+                outside += FloodFillComponent(root, arb.body_b if body == arb.body_a else arb.body_a)
                 arb = cpArbiterNext(arb, body)
             constraint = body.constraintList
             while constraint != NULL:
-                FloodFillComponent(root, constraint.b if body == constraint.a else constraint.a)
+                outside += FloodFillComponent(root, constraint.b if body == constraint.a
+                                              else constraint.a)
                 constraint = cpConstraintNext(constraint, body)
+    return outside
+
+# A component that stays awake: its bodies in the space lose their links as
+# the component loop passes them, but a body outside the space is in no
+# array and keeps them (Munk2D keeps the root and the next body, which may
+# later leave the space and be freed). The root stays non-NULL, as in
+# Munk2D: the flood fill passes such a body over from then on, and the
+# chipmunk solver keeps that, bit for bit. It names the body itself, which
+# is always there, and the next link goes; cpBodyActivate wakes what the body
+# is jointed to in its stead (body.pyx, _rootStillSleeps).
+cdef void _settleOutsideMembers(cpBody *root, cpSpace *space) noexcept nogil:
+    cdef cpBody *body = root
+    cdef cpBody *next
+    while body != NULL:
+        next = body.sleeping.next
+        if body.space != space:
+            body.sleeping.root = body
+            body.sleeping.next = NULL
+        body = next
+
+# Kept awake this step: a body that touches or is jointed to a kinematic body
+# of the space, or touches a kinematic or orphan body that owns their arbiter
+# (is its body_a). The arbiter or joint then stays with the other body, which
+# stays awake; were this body to sleep, the next step would thread that
+# arbiter into its list a second time (a loop: the flood fill never ends).
+# Munk2D keeps such a body awake by waking it, which restarts its idle time at
+# 0; with a sleep_time_threshold <= 0 that is idle enough, and the body sleeps
+# anyway (pymunk aborts there, on the kinematic body's own component, or goes
+# on with the arbiter threaded twice). So at such a threshold the body's idle
+# time is -inf for this step: its component stays active, and the mark is
+# reset to 0 before the step ends. Idle times are >= 0 otherwise, so nothing
+# else holds the mark; at a threshold > 0 this is never called.
+cdef inline void _holdAwake(cpBody *body, cpSpace *space) noexcept nogil:
+    if (body.space == space and cpBodyGetType(body) == CP_BODY_TYPE_DYNAMIC
+            and not cpBodyIsSleeping(body)):
+        body.sleeping.idleTime = -INFINITY
+
+cdef void _holdAwakeTouching(cpSpace *space, int threadCount) noexcept nogil:
+    cdef cpArray *arbiters = space.arbiters
+    cdef cpArray *constraints = space.constraints
+    cdef cpArbiter *arb
+    cdef cpConstraint *constraint
+    cdef cpBody *a
+    cdef cpBody *b
+    cdef int i
+    for i in range(threadCount):
+        arb = <cpArbiter *>arbiters.arr[i]
+        a = arb.body_a
+        b = arb.body_b
+        if cpBodyGetType(b) == CP_BODY_TYPE_KINEMATIC and b.space == space:
+            _holdAwake(a, space)
+        if cpBodyGetType(a) == CP_BODY_TYPE_KINEMATIC or _orphanBody(a, space):
+            _holdAwake(b, space)
+    for i in range(constraints.num):
+        constraint = <cpConstraint *>constraints.arr[i]
+        a = constraint.a
+        b = constraint.b
+        if cpBodyGetType(b) == CP_BODY_TYPE_KINEMATIC and b.space == space:
+            _holdAwake(a, space)
+        if cpBodyGetType(a) == CP_BODY_TYPE_KINEMATIC and a.space == space:
+            _holdAwake(b, space)
 
 cdef inline cpBool ComponentActive(cpBody *root, cpFloat threshold) noexcept nogil:
     cdef cpBody *body = root
@@ -616,13 +689,15 @@ cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int threadCount) 
     cdef cpArray *arbiters
     cdef cpArray *constraints
     cdef cpFloat dv, dvsq, keThreshold
-    cdef int i, count
+    cdef int i, count, outside
     cdef cpBody *body
     cdef cpBody *a
     cdef cpBody *b
     cdef cpBody *other
     cdef cpArbiter *arb
     cdef cpConstraint *constraint
+    # See _holdAwake: only where Munk2D cannot keep a body awake by waking it.
+    cdef cpBool holdAwake = sleep and not (space.sleepTimeThreshold > 0.0)
 
     if sleep:
         dv = space.idleSpeedThreshold
@@ -669,12 +744,20 @@ cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int threadCount) 
                 cpBodyActivate(b)
             i += 1
 
+        if holdAwake:
+            # After all the waking above, which restarts idle times at 0.
+            _holdAwakeTouching(space, count)
+
         # Build the components and put the idle ones to sleep.
         i = 0
         while i < bodies.num:
             body = <cpBody *>bodies.arr[i]
-            if ComponentRoot(body) == NULL:
-                FloodFillComponent(body, body)
+            # Kinematic bodies never sleep. (Munk2D finds a kinematic body's
+            # empty component idle once the threshold is <= 0, as its idle
+            # time stays 0, and aborts on deactivating it; above 0 the
+            # component is always active, so skipping it changes nothing.)
+            if ComponentRoot(body) == NULL and cpBodyGetType(body) == CP_BODY_TYPE_DYNAMIC:
+                outside = FloodFillComponent(body, body)
                 if not ComponentActive(body, space.sleepTimeThreshold):
                     cpArrayPush(space.sleepingComponents, body)
                     other = body
@@ -683,10 +766,14 @@ cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int threadCount) 
                         other = other.sleeping.next
                     # Deactivation swap-removed this body: same index again.
                     continue
+                if outside:
+                    _settleOutsideMembers(body, space)
             i += 1
             # Only sleeping bodies keep their component links.
             body.sleeping.root = NULL
             body.sleeping.next = NULL
+            if body.sleeping.idleTime < 0.0:
+                body.sleeping.idleTime = 0.0    # the _holdAwake mark, spent
 
 
 
@@ -700,7 +787,18 @@ cdef void cpSpaceWakeComponent(cpSpace *space, cpBody *root) noexcept nogil:
         bodyA.sleeping.idleTime = 0.0
         bodyA.sleeping.root = NULL
         bodyA.sleeping.next = NULL
-        cpSpaceActivateBody(space, bodyA)
+        if bodyA.space == space:
+            cpSpaceActivateBody(space, bodyA)
+        else:
+            # A body outside the space, held by a joint, joins the component
+            # of the bodies it is jointed to (the flood fill follows joints).
+            # Munk2D wakes it into the space's body array: the space then
+            # integrates a body it does not hold, the body can become the
+            # root of a sleeping component, and activate() on that root
+            # dereferences its NULL space (pymunk segfaults). Only its joints
+            # go back to the solver; it has no shapes here (a body with shapes
+            # in the space is an orphan and never joins a component).
+            _pushOwnedConstraints(space, bodyA)
         bodyA = next
     cpArrayDeleteObj(space.sleepingComponents, root)
 
@@ -750,7 +848,17 @@ cdef void _hookSleepWithGroup(cpBody *body, cpBody *group) noexcept nogil:
     while arb != NULL:
         next_arb = cpArbiterNext(arb, body)
         other = arb.body_b if arb.body_a == body else arb.body_a
-        if (cpBodyGetType(other) != CP_BODY_TYPE_STATIC
+        if not _arbiterCached(space, arb):
+            # Last step's arbiter, already expired: with a collision
+            # persistence of 0 a step's arbiters leave the cache (and go back
+            # to the pool) at once, threaded until the next step unthreads
+            # them. A sleeping body would keep it threaded while the pool hands
+            # it to another pair (pymunk hangs). The next step unthreads it
+            # and drops it from the step's array anyway if the body stays
+            # awake; here both happen now.
+            cpArbiterUnthread(arb)
+            cpArrayDeleteObj(space.arbiters, arb)
+        elif (cpBodyGetType(other) != CP_BODY_TYPE_STATIC
                 and (groupRoot == NULL or other.sleeping.root != groupRoot)):
             if cpBodyIsSleeping(other):
                 cpBodyActivate(other)
@@ -770,6 +878,13 @@ cdef void _hookSleepWithGroup(cpBody *body, cpBody *group) noexcept nogil:
         cpArrayPush(space.sleepingComponents, body)
     cpArrayDeleteObj(space.dynamicBodies, body)
 
+cdef cpBool _arbiterCached(cpSpace *space, cpArbiter *arb) noexcept nogil:
+    cdef const cpShape *shape_pair[2]
+    shape_pair[0] = arb.a
+    shape_pair[1] = arb.b
+    return cpHashSetFind(space.cachedArbiters, CP_HASH_PAIR(<cpHashValue>arb.a, <cpHashValue>arb.b),
+                         shape_pair) == arb
+
 cdef tamias_BodySpaceHooks _hooks
 _hooks.wake_component = cpSpaceWakeComponent
 _hooks.body_type_changed = _hookBodyTypeChanged
@@ -786,6 +901,31 @@ cdef cpBody *_firstNonFiniteBody(cpArray *bodies) noexcept nogil:
         body = <cpBody *>bodies.arr[i]
         if _bodyNonFinite(body):
             return body
+    return NULL
+
+
+cdef cpBody *tamias_first_non_finite_body(cpSpace *space) noexcept nogil:
+    # Every body a step can change: the awake array (dynamic and kinematic
+    # bodies), the static bodies (a contact or joint impulse of inf times
+    # their zero inverse mass is NaN) and joints' bodies outside the space,
+    # which the solver pushes but does not integrate. Sleeping bodies are not
+    # touched by a step, and orphans (shapes left in the space) are found by
+    # the Python side (Space._check_bodies), which knows when there may be
+    # some. The static array is short and the joints cost two pointer tests.
+    cdef cpBody *body = _firstNonFiniteBody(space.dynamicBodies)
+    cdef cpConstraint *c
+    cdef int i
+    if body != NULL:
+        return body
+    body = _firstNonFiniteBody(space.staticBodies)
+    if body != NULL:
+        return body
+    for i in range(space.constraints.num):
+        c = <cpConstraint *>space.constraints.arr[i]
+        if c.a.space != space and _bodyNonFinite(c.a):
+            return c.a
+        if c.b.space != space and _bodyNonFinite(c.b):
+            return c.b
     return NULL
 
 
@@ -819,6 +959,8 @@ cdef void _scanOrphans(void *obj, void *data) noexcept nogil:
     if body == NULL or not _orphanBody(body, scan.space):
         return
     scan.orphans += 1
+    if scan.nonFinite == NULL and _bodyNonFinite(body):
+        scan.nonFinite = body
     if scan.bad == NULL and not (body.m > 0.0 and body.m < INFINITY and body.i > 0.0):
         scan.bad = body
 

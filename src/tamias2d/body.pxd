@@ -114,6 +114,9 @@ cdef void cpBodyApplyImpulseAtWorldPoint(cpBody *body, cpVect impulse, cpVect po
 cdef void cpBodyApplyImpulseAtLocalPoint(cpBody *body, cpVect impulse, cpVect point) noexcept nogil
 # cpSpaceComponent.c, body side (see the hooks above for the space side).
 cdef void cpBodyActivate(cpBody *body) noexcept nogil
+# A body outside every space and jointed into none forgets a component root
+# left over from a component that stayed awake (see body.pyx).
+cdef void tamias_body_drop_stale_root(cpBody *body) noexcept nogil
 cdef void cpBodyActivateStatic(cpBody *body, cpShape *filter) noexcept nogil
 cdef void cpBodySleep(cpBody *body) noexcept nogil
 cdef void cpBodySleepWithGroup(cpBody *body, cpBody *group) noexcept nogil

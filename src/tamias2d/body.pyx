@@ -59,6 +59,7 @@ STATIC = <int>CP_BODY_TYPE_STATIC
 # The helpers of chipmunk_private.h are in _private.pxd.
 from tamias2d._threadguard cimport tamias_wait_body
 from tamias2d._private cimport cpArbiterNext, cpConstraintNext, apply_impulse
+from tamias2d._containers cimport cpArrayContains
 
 
 # -- space hooks ---------------------------------------------------------------------
@@ -310,6 +311,65 @@ cdef void cpBodyApplyImpulseAtLocalPoint(cpBody *body, cpVect impulse, cpVect po
 
 
 # -- cpSpaceComponent.c, body side ----------------------------------------------------
+
+# A body outside every space is reached by the flood fill through its joints
+# and joins the component of the bodies it is jointed to. If that component
+# falls asleep the body is one of its chain and its root is the component's.
+# If it stays awake the body keeps a root (itself, see _settleOutsideMembers
+# in _space_step.pyx): Munk2D keeps the component's root there, which may
+# later be awake, in another component or freed, and the flood fill passes
+# the body over from then on. Such a stale root is never followed: waking
+# the body wakes instead what it is jointed to that sleeps, which is what
+# Munk2D's root stood for (the component it had joined).
+cdef cpBool _rootStillSleeps(cpBody *body, cpBody *root) noexcept nogil:
+    cdef cpConstraint *c = body.constraintList
+    while c != NULL:
+        if c.space != NULL and cpArrayContains(c.space.sleepingComponents, root):
+            return 1
+        c = cpConstraintNext(c, body)
+    return 0
+
+
+cdef void _wakeJointPartners(cpBody *body) noexcept nogil:
+    cdef cpConstraint *c = body.constraintList
+    cdef cpBody *other
+    while c != NULL:
+        other = c.b if c.a == body else c.a
+        # Only partners in a space: no recursion into another outside body.
+        if c.space != NULL and other.space != NULL and cpBodyIsSleeping(other):
+            cpBodyActivate(other)
+        c = cpConstraintNext(c, body)
+
+
+# A joint belongs to its body a, or to its body b when a is static: the owner's
+# sleeping takes it out of the solver and waking puts it back. A body a that
+# turns static or stops being static hands its joints over; a sleeping body b
+# is woken first, so that the joint is in the solver exactly while its new
+# owner is awake (else it was lost for good or, woken later, pushed twice:
+# Munk2D and pymunk).
+cdef void _wakeJointsChangingOwner(cpBody *body) noexcept nogil:
+    cdef cpConstraint *c = body.constraintList
+    while c != NULL:
+        if c.a == body and c.space != NULL and cpBodyIsSleeping(c.b):
+            cpBodyActivate(c.b)
+        c = cpConstraintNext(c, body)
+
+
+cdef void tamias_body_drop_stale_root(cpBody *body) noexcept nogil:
+    # Once the body is jointed into no space the flood fill cannot reach it
+    # and its root means nothing: it stops counting as asleep.
+    cdef cpConstraint *c
+    if body.space != NULL or body.sleeping.root == NULL:
+        return
+    c = body.constraintList
+    while c != NULL:
+        if c.space != NULL:
+            return
+        c = cpConstraintNext(c, body)
+    body.sleeping.root = NULL
+    body.sleeping.next = NULL
+
+
 cdef void cpBodyActivate(cpBody *body) noexcept nogil:
     cdef cpBody *root
     cdef cpBody *other
@@ -319,6 +379,11 @@ cdef void cpBodyActivate(cpBody *body) noexcept nogil:
     body.sleeping.idleTime = 0.0
 
     root = body.sleeping.root
+    if root != NULL and body.space == NULL and not _rootStillSleeps(body, root):
+        # A stale root (see _rootStillSleeps).
+        root = NULL
+        _wakeJointPartners(body)
+        tamias_body_drop_stale_root(body)
     if root != NULL and cpBodyIsSleeping(root):
         if _hooks.wake_component != NULL:
             _hooks.wake_component(root.space, root)
@@ -924,7 +989,15 @@ cdef class Body:
             # has the call to cpBodyActivateStatic here commented out; a
             # stale arbiter stays in their lists). Wake them first.
             cpBodyActivateStatic(&self._body, NULL)
+        if (t == CP_BODY_TYPE_STATIC) != (cpBodyGetType(&self._body) == CP_BODY_TYPE_STATIC):
+            _wakeJointsChangingOwner(&self._body)
         cpBodySetType(&self._body, <cpBodyType>t)
+        if t != CP_BODY_TYPE_DYNAMIC and self._body.space == NULL:
+            # A body outside the space keeps a stale component root from the
+            # flood fill (see _rootStillSleeps); a kinematic or static body
+            # is never part of a component.
+            self._body.sleeping.root = NULL
+            self._body.sleeping.next = NULL
 
     @property
     def space(self):

@@ -81,6 +81,7 @@ cdef class Space:
     cdef int _check_c_errors(self) except -1
     cdef int _raise_non_finite(self, cpBody *body, double dt) except -1
     cdef int _check_bodies(self) except -1
+    cdef cpBody *_first_non_finite(self)
     cdef _add_body(self, Body body)
     cdef _add_shape(self, Shape shape)
     cdef _remove(self, tuple objs)

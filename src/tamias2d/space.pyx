@@ -69,7 +69,7 @@ from tamias2d.arbiter cimport (Arbiter, arbiter_wrap, cpArbiterInit, cpArbiterUp
     cpArbiterPreStep, cpArbiterApplyCachedImpulse, cpArbiterApplyImpulse,
     cpArbiterUnthread, cpCollisionHandlerDoNothing, cpCollisionDoNothing,
     cpArbiterThreadForBody, cpArbiterNext)
-from tamias2d.body cimport cpBodyRemoveConstraint
+from tamias2d.body cimport cpBodyRemoveConstraint, tamias_body_drop_stale_root
 from tamias2d._pickle cimport snapshot_module as _snapshot
 from tamias2d.constraints cimport (Constraint, tamias_constraint_detach,
     tamias_space_detach_constraints, tamias_check_constraints, tamias_constraint_debug_draw,
@@ -86,7 +86,8 @@ from tamias2d._private cimport (cpConstraintNext, cpSpaceArrayForBodyType,
     cpCallHandlers, PHASE_SEPARATE)
 from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, cpSpaceGetPostStepCallback,
     cpSpaceAddPostStepCallback, cpSpaceStep, cpShapeUpdateFunc, cpSpaceWakeComponent, _bodyNonFinite,
-    _firstNonFiniteBody, _forgetNonFiniteImpulses, OrphanScan, _scanOrphans)
+    _firstNonFiniteBody, tamias_first_non_finite_body, _forgetNonFiniteImpulses, OrphanScan,
+    _scanOrphans)
 from tamias2d._soft_step cimport (cpSoftStep, SoftSettingsInit, SoftScratchFree, SoftPushOut,
     SoftSpeculative)
 from tamias2d._structs cimport TAMIAS_SOLVER_CHIPMUNK, TAMIAS_SOLVER_SOFT
@@ -332,6 +333,17 @@ cdef cpShape *cpSpaceAddShape(cpSpace *space, cpShape *shape) noexcept nogil:
     return shape
 
 cdef cpBody *cpSpaceAddBody(cpSpace *space, cpBody *body) noexcept nogil:
+    if body.sleeping.root != NULL:
+        # A body outside every space with component links: asleep in the
+        # component of bodies it is jointed to (woken here, as adding wakes),
+        # or left over from a component that stayed awake, which resets only
+        # the links of the bodies in its array (Munk2D keeps the stale root,
+        # and the body then counts as asleep in the space it joins: the step
+        # never unthreads its arbiters and the next contact loops; pymunk
+        # hangs). cpBodyActivate follows the root only if it still sleeps.
+        cpBodyActivate(body)
+        body.sleeping.root = NULL
+        body.sleeping.next = NULL
     if not cpArrayPush(cpSpaceArrayForBodyType(space, cpBodyGetType(body)), body):
         return NULL
     body.space = space
@@ -373,6 +385,31 @@ cdef void cpSpaceFilterArbiters(cpSpace *space, cpBody *body, cpShape *filter) n
     cpHashSetFilter(space.cachedArbiters, cachedArbitersFilter, &context)
     cpSpaceUnlock(space, 1)
 
+# With a collision persistence of 0, the last step's arbiters left the cache
+# (back to the pool) when that step ended, but stay in its arbiter array and
+# threaded in their bodies' lists until the next step. The cache filter above
+# does not see them: Munk2D leaves the removed shape in them (a copy of the
+# space then finds a shape it does not hold). No separate callback, as
+# Munk2D, whose pair was never seen again. With a persistence > 0 every
+# arbiter of the array is cached, so nothing is found here.
+cdef void _dropExpiredArbiters(cpSpace *space, cpShape *shape) noexcept nogil:
+    cdef cpArray *arbiters = space.arbiters
+    cdef cpArbiter *arb
+    cdef int i = 0
+    while i < arbiters.num:
+        arb = <cpArbiter *>arbiters.arr[i]
+        if arb.a == shape or arb.b == shape:
+            cpArbiterUnthread(arb)
+            cpArrayDeleteObj(arbiters, arb)
+            if not cpArrayContains(space.pooledArbiters, arb):
+                cpArrayPush(space.pooledArbiters, arb)
+            arb.a = NULL
+            arb.b = NULL
+            arb.contacts = NULL
+            arb.count = 0
+            continue  # swap-removed: the same index holds the next one
+        i += 1
+
 cdef void cpSpaceRemoveShape(cpSpace *space, cpShape *shape) noexcept nogil:
     cdef cpBody *body = shape.body
     cdef cpBool isStatic = cpBodyGetType(body) == CP_BODY_TYPE_STATIC
@@ -382,6 +419,7 @@ cdef void cpSpaceRemoveShape(cpSpace *space, cpShape *shape) noexcept nogil:
         cpBodyActivate(body)
     cpBodyRemoveShape(body, shape)
     cpSpaceFilterArbiters(space, body, shape)
+    _dropExpiredArbiters(space, shape)
     cpSpatialIndexRemove(space.staticShapes if isStatic else space.dynamicShapes, shape, shape.hashid)
     shape.space = NULL
     shape.hashid = 0
@@ -417,6 +455,10 @@ cdef void cpSpaceRemoveConstraint(cpSpace *space, cpConstraint *constraint) noex
     cpBodyRemoveConstraint(constraint.a, constraint)
     cpBodyRemoveConstraint(constraint.b, constraint)
     constraint.space = NULL
+    # Waking above followed the roots that still sleep; a body outside the
+    # space that this joint held keeps a stale one (body.pyx).
+    tamias_body_drop_stale_root(constraint.a)
+    tamias_body_drop_stale_root(constraint.b)
 
 
 # -- iteration ----------------------------------------------------------------------------
@@ -515,7 +557,7 @@ cdef cpBody *tamias_space_step(cpSpace *space, cpFloat dt) noexcept nogil:
         cpSoftStep(space, dt)
     else:
         cpSpaceStep(space, dt)
-    return _firstNonFiniteBody(space.dynamicBodies)
+    return tamias_first_non_finite_body(space)
 
 
 # ================================================================================================
@@ -1191,8 +1233,11 @@ cdef class Space:
     @idle_speed_threshold.setter
     def idle_speed_threshold(self, value):
         cdef double v = value
-        if v != v:
-            raise ValueError("idle_speed_threshold must be a number, not NaN")
+        # A speed: negative ones (pymunk squares them) mean nothing. inf is
+        # kept: every body counts as idle, and sleeps after the idle time.
+        if not (v >= 0.0):
+            raise ValueError(f"idle_speed_threshold must be a speed >= 0 (0 derives it from "
+                             f"gravity), not {value!r}")
         tamias_wait_for_step(&self._space)
         self._space.idleSpeedThreshold = v
 
@@ -1201,7 +1246,12 @@ cdef class Space:
         """Idle time after which a group of bodies falls asleep; ``inf``
         (the default) turns sleeping off. Setting it to ``inf`` wakes every
         sleeping body (pymunk leaves them asleep and its next steps can
-        hang); NaN is refused.
+        hang). NaN and negative times are refused (ValueError).
+
+        At 0 every dynamic body falls asleep at the end of each step, moving
+        or not, as in pymunk (no idle time is below 0), except those that
+        touch or are jointed to a kinematic body: they stay awake (pymunk
+        aborts there). Kinematic bodies never sleep, at any threshold.
 
         >>> import tamias2d
         >>> tamias2d.Space().sleep_time_threshold
@@ -1213,9 +1263,9 @@ cdef class Space:
     def sleep_time_threshold(self, value):
         cdef double v = value
         cdef cpArray *components = self._space.sleepingComponents
-        if v != v:
-            raise ValueError("sleep_time_threshold must be a number (inf turns sleeping off), "
-                             "not NaN")
+        if not (v >= 0.0):
+            raise ValueError(f"sleep_time_threshold must be a time >= 0 (inf turns sleeping "
+                             f"off), not {value!r}")
         tamias_wait_for_step(&self._space)
         self._space.sleepTimeThreshold = v
         if v == INFINITY:
@@ -1258,6 +1308,12 @@ cdef class Space:
         """Fraction of overlap left uncorrected after one second (default
         ``pow(1 - 0.1, 60)`` in C floats).
 
+        A step corrects ``1 - collision_bias ** dt`` of the overlap: 0
+        corrects it all at once, 1 not at all. NaN, inf and negative values
+        are refused (ValueError: the correction would be NaN). Values above 1
+        are accepted, as pymunk's own tests set them, but they push
+        overlapping shapes further in.
+
         >>> import tamias2d
         >>> tamias2d.Space().collision_bias
         0.0017970074436457143
@@ -1267,12 +1323,20 @@ cdef class Space:
     @collision_bias.setter
     def collision_bias(self, value):
         cdef double bias = value
+        if not (isfinite(bias) and bias >= 0.0):
+            raise ValueError(f"collision_bias must be a finite number >= 0 (the fraction of "
+                             f"overlap left after a second, 0 to 1), not {value!r}")
         tamias_wait_for_step(&self._space)
         self._space.collisionBias = bias
 
     @property
     def collision_persistence(self):
         """Steps an arbiter is kept after its shapes separate (default 3).
+
+        At 0, as in pymunk, the arbiters expire in the step that finds them,
+        before the solver runs: contacts are reported (``begin`` at every
+        step, ``separate`` never) but not solved, and shapes pass through
+        each other.
 
         >>> import tamias2d
         >>> tamias2d.Space().collision_persistence
@@ -1589,8 +1653,10 @@ cdef class Space:
     # -- the step ----------------------------------------------------------------------------
 
     cdef int _raise_non_finite(self, cpBody *body, double dt) except -1:
-        cdef cpArray *bodies = self._space.dynamicBodies
+        cdef cpArray *bodies
         cdef cpBody *other
+        cdef cpConstraint *c
+        cdef int i
         _forgetNonFiniteImpulses(&self._space)
         b = <object>body.userData if body.userData != NULL else None
         err = IllegalBody(
@@ -1599,18 +1665,52 @@ cdef class Space:
             f"Some input is too large for double precision (the time step, a velocity, a "
             f"force, a size). The space refuses to step until the bodies in this "
             f"exception's .bodies are set to finite values or removed.")
-        err.bodies = []
-        for i in range(bodies.num):
-            other = <cpBody *>bodies.arr[i]
-            if _bodyNonFinite(other) and other.userData != NULL:
-                err.bodies.append(<object>other.userData)
+        # Every body the check of the step looks at (tamias_first_non_finite_body
+        # and the orphans): the awake ones, the static ones, joints' bodies
+        # outside the space, bodies whose shapes stayed in the space.
+        found = {}
+        for k in range(2):
+            bodies = self._space.dynamicBodies if k == 0 else self._space.staticBodies
+            for i in range(bodies.num):
+                other = <cpBody *>bodies.arr[i]
+                if _bodyNonFinite(other) and other.userData != NULL:
+                    found[<object>other.userData] = None
+        for i in range(self._space.constraints.num):
+            c = <cpConstraint *>self._space.constraints.arr[i]
+            other = c.a
+            if other.space != &self._space and _bodyNonFinite(other) and other.userData != NULL:
+                found[<object>other.userData] = None
+            other = c.b
+            if other.space != &self._space and _bodyNonFinite(other) and other.userData != NULL:
+                found[<object>other.userData] = None
+        if self._may_have_orphans:
+            for shape in list(self._shapes):
+                other = (<Shape>shape)._shape.body
+                if (other != NULL and other.space != &self._space and _bodyNonFinite(other)
+                        and other.userData != NULL):
+                    found[<object>other.userData] = None
+        err.bodies = list(found)
         raise err
+
+    # The first non-finite body of the space, orphans included.
+    cdef cpBody *_first_non_finite(self):
+        cdef cpBody *body = tamias_first_non_finite_body(&self._space)
+        cdef OrphanScan scan
+        if body != NULL or not self._may_have_orphans:
+            return body
+        scan.space = &self._space
+        scan.bad = NULL
+        scan.nonFinite = NULL
+        scan.orphans = 0
+        cpSpatialIndexEach(self._space.dynamicShapes, _scanOrphans, &scan)
+        cpSpatialIndexEach(self._space.staticShapes, _scanOrphans, &scan)
+        return scan.nonFinite
 
     cdef int _check_bodies(self) except -1:
         cdef cpArray *bodies = self._space.dynamicBodies
         cdef cpBody *body
         if self._overflowed:
-            body = _firstNonFiniteBody(bodies)
+            body = self._first_non_finite()
             if body != NULL:
                 self._raise_non_finite(body, self._space.curr_dt)
             self._overflowed = False
@@ -1629,6 +1729,7 @@ cdef class Space:
         cdef OrphanScan scan
         scan.space = &self._space
         scan.bad = NULL
+        scan.nonFinite = NULL
         scan.orphans = 0
         cpSpatialIndexEach(self._space.dynamicShapes, _scanOrphans, &scan)
         cpSpatialIndexEach(self._space.staticShapes, _scanOrphans, &scan)
@@ -1728,6 +1829,10 @@ cdef class Space:
         tamias_end_step(&self._space)
         try:
             self._check_c_errors()
+            if bad == NULL and self._may_have_orphans:
+                # Bodies removed from the space whose shapes stayed: the C
+                # check cannot see them (see _first_non_finite).
+                bad = self._first_non_finite()
             if bad != NULL:
                 self._overflowed = True
                 self._raise_non_finite(bad, dt)
