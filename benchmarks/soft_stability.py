@@ -14,14 +14,7 @@ import tamias2d
 import hard_cases as hc
 
 
-def fmt(v):
-    if isinstance(v, float):
-        if v == 0.0:
-            return "0"
-        if abs(v) >= 1e5 or abs(v) < 1e-3:
-            return f"{v:.3g}"
-        return f"{v:.3g}"
-    return str(v)
+from stability_report import fmt  # noqa: E402 (the same number format)
 
 
 def main():

@@ -802,11 +802,18 @@ def build_card_house(mod, levels=3, length=40.0, thick=1.0, lean=0.3, pitch=30.0
                  home=[(tuple(b.position), b.angle) for b in cards])
 
 
-def _card_probe(scene):
-    home = scene.watch["home"]
-    return {"d": max(math.hypot(b.position.x - p[0], b.position.y - p[1])
-                     for b, (p, a) in zip(scene.watch["cards"], home)),
-            "turn": max(abs(b.angle - a) for b, (p, a) in zip(scene.watch["cards"], home))}
+def _moved_probe(key):
+    """A probe of the farthest move and largest turn of the bodies
+    ``scene.watch[key]`` since ``scene.watch["home"]``."""
+    def probe(scene):
+        pairs = list(zip(scene.watch[key], scene.watch["home"]))
+        return {"d": max(math.hypot(b.position.x - p[0], b.position.y - p[1])
+                         for b, (p, a) in pairs),
+                "turn": max(abs(b.angle - a) for b, (p, a) in pairs)}
+    return probe
+
+
+_card_probe = _moved_probe("cards")
 
 
 def _card_judge(scene, samples):
@@ -841,11 +848,7 @@ def build_arch(mod, blocks=11, inner=80.0, outer=100.0, friction=0.6):
                  home=[(tuple(b.position), b.angle) for b in stones])
 
 
-def _arch_probe(scene):
-    home = scene.watch["home"]
-    return {"d": max(math.hypot(b.position.x - p[0], b.position.y - p[1])
-                     for b, (p, a) in zip(scene.watch["stones"], home)),
-            "turn": max(abs(b.angle - a) for b, (p, a) in zip(scene.watch["stones"], home))}
+_arch_probe = _moved_probe("stones")
 
 
 def _arch_judge(scene, samples):

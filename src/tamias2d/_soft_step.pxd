@@ -8,13 +8,15 @@
 #   cpSpaceProcessComponents, StageFilterArbiterCache   (shared)
 #   SoftGatherBodies        awake bodies into a contiguous SoftBody array
 #   SoftPrepareJoints       joint pre-solve callbacks, warm-start rescale
-#   SoftPrepareContacts     arbiters into a contiguous SoftContact array
+#   SoftPrepareContacts     arbiters into a contiguous SoftContact array;
+#                           each point's softness for its load
+#                           (SoftPointSoftness), the 2x2 block matrices
 #   per substep (h = dt / substeps):
 #     SoftIntegrateVelocities  gravity, damping, forces, velocity_func
 #     SoftWarmStart            last substep's impulses (joints, contacts)
-#     SoftSolve(useBias=1)     soft contacts, joints
+#     SoftSolve(useBias=1)     soft contacts (normal rows only), joints
 #     SoftIntegratePositions   position_func, delta position / rotation
-#     SoftRelax                SoftSolve without bias (rigid)
+#     SoftRelax x2             SoftSolve without bias (rigid), with friction
 #   SoftApplyRestitution, SoftStoreImpulses, SoftFinishBodies
 #   StagePostSolve, unlock (post-step callbacks)              (shared)
 from tamias2d._config cimport cpFloat, cpBool

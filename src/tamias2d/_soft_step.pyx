@@ -17,7 +17,7 @@ push-out speed follow it); overlap is pushed out softly down to the depth at
 which a contact carries its load, as in Box2D, not left alone up to the slop.
 
 Beyond Box2D's soft step (docs/stability.md measures each):
-  * a two-point manifold's normal rows are solved together (SoftSolveBlock),
+  * a two-point manifold's normal rows are solved together (SoftSolve),
     so tall stacks do not buckle from the order the corners are solved in;
   * a loaded point is stiffened for its load (SoftPointSoftness), so the
     bottom of a tall stack or pyramid sinks no deeper than the top;
@@ -478,8 +478,6 @@ cdef inline void SoftPrepareBlock(SoftContact *sc, SoftBody *a, SoftBody *b) noe
     # order is what lets tall stacks buckle.
     cdef SoftPoint *p1 = &sc.p[0]
     cdef SoftPoint *p2 = &sc.p[1]
-    cdef cpFloat nx = sc.nx
-    cdef cpFloat ny = sc.ny
     cdef cpFloat rnA1 = p1.rnA
     cdef cpFloat rnB1 = p1.rnB
     cdef cpFloat rnA2 = p2.rnA
