@@ -495,7 +495,7 @@ class Fuzzer:
         b = self.pick(self.bodies)
         if b is None:
             return
-        which = self.r.choice(["sleep", "activate", "sleep_with_group", "threshold"])
+        which = self.r.choice(self.SLEEP_OPS)
         if which == "sleep":
             self.note(f"  {self.label(b)}.sleep()")
             self.attempt(b.sleep)
@@ -507,9 +507,15 @@ class Fuzzer:
             self.note(f"  {self.label(b)}.sleep_with_group({self.label(other)})")
             self.attempt(b.sleep_with_group, other)
         else:
-            value = self.r.choice([0.2, math.inf])
-            self.note(f"  space.sleep_time_threshold = {value}")
-            self.set_threshold(value)
+            self.sleep_threshold()
+
+    # The draws of sleep(): the operation, and what "threshold" sets.
+    SLEEP_OPS = ["sleep", "activate", "sleep_with_group", "threshold"]
+
+    def sleep_threshold(self):
+        value = self.r.choice([0.2, math.inf])
+        self.note(f"  space.sleep_time_threshold = {value}")
+        self.set_threshold(value)
 
     def reindex(self):
         which = self.r.choice(["static", "shape", "body"])
@@ -651,25 +657,12 @@ class SleepFuzzer(Fuzzer):
         self.note(f"  space.{attr} = {value!r}")
         self.attempt(setattr, self.space, attr, value)
 
-    def sleep(self):
-        b = self.pick(self.bodies)
-        if b is None:
-            return
-        which = self.r.choice(["sleep", "activate", "activate", "sleep_with_group", "threshold"])
-        if which == "sleep":
-            self.note(f"  {self.label(b)}.sleep()")
-            self.attempt(b.sleep)
-        elif which == "activate":
-            self.note(f"  {self.label(b)}.activate()")
-            self.attempt(b.activate)
-        elif which == "sleep_with_group":
-            other = self.pick(self.bodies)
-            self.note(f"  {self.label(b)}.sleep_with_group({self.label(other)})")
-            self.attempt(b.sleep_with_group, other)
-        else:
-            value = self.r.choice(self.THRESHOLDS)
-            self.note(f"  space.sleep_time_threshold = {value}")
-            self.attempt(setattr, self.space, "sleep_time_threshold", value)
+    SLEEP_OPS = ["sleep", "activate", "activate", "sleep_with_group", "threshold"]
+
+    def sleep_threshold(self):
+        value = self.r.choice(self.THRESHOLDS)
+        self.note(f"  space.sleep_time_threshold = {value}")
+        self.attempt(setattr, self.space, "sleep_time_threshold", value)
 
     def joint(self):
         m = self.mod

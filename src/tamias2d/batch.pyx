@@ -124,6 +124,14 @@ cdef object _np():
     return _numpy
 
 
+cdef int _code_array(tuple codes, int *code) except -1:
+    # The parsed field codes as the C array the body loops read; their count.
+    cdef int k
+    for k in range(len(codes)):
+        code[k] = codes[k]
+    return len(codes)
+
+
 cdef tuple _parse_fields(object fields):
     """The field codes of `fields` (a name or a sequence of names)."""
     if isinstance(fields, str):
@@ -268,11 +276,8 @@ def get_bodies(space, fields, out=None):
     if n == 0:
         return out
     cdef double[:, ::1] view = out
-    cdef int ncodes = len(codes)
     cdef int code[MAX_FIELDS]
-    cdef int k
-    for k in range(ncodes):
-        code[k] = codes[k]
+    cdef int ncodes = _code_array(codes, code)
     cdef Py_ssize_t pos = 0, row = 0
     cdef PyObject *key
     cdef PyObject *value
@@ -335,11 +340,8 @@ def set_bodies(space, values, fields):
                 names = body_columns([_FIELD_NAMES[c] for c in codes])
                 raise IllegalBody(f"values[{i}, {j}] ({names[j]} of body {i}) must be finite, "
                                   f"got {view[i, j]!r}; no body was changed")
-    cdef int ncodes = len(codes)
     cdef int code[MAX_FIELDS]
-    cdef int k
-    for k in range(ncodes):
-        code[k] = codes[k]
+    cdef int ncodes = _code_array(codes, code)
     cdef Py_ssize_t pos = 0, row = 0
     cdef PyObject *key
     cdef PyObject *value
@@ -715,11 +717,8 @@ def get_spaces_bodies(spaces, fields, out=None):
     cdef list items = [_space_arg(s) for s in spaces]
     cdef tuple codes = _parse_fields(fields)
     cdef int width = _width(codes)
-    cdef int ncodes = len(codes)
     cdef int code[MAX_FIELDS]
-    cdef int k
-    for k in range(ncodes):
-        code[k] = codes[k]
+    cdef int ncodes = _code_array(codes, code)
     while True:
         _wait_spaces(items)
         offsets = _stack_offsets(items)
@@ -771,11 +770,8 @@ def set_spaces_bodies(spaces, values, fields):
     cdef list items = [_space_arg(s) for s in spaces]
     cdef tuple codes = _parse_fields(fields)
     cdef int width = _width(codes)
-    cdef int ncodes = len(codes)
     cdef int code[MAX_FIELDS]
-    cdef int k
-    for k in range(ncodes):
-        code[k] = codes[k]
+    cdef int ncodes = _code_array(codes, code)
     arr = np.asarray(values)
     if arr.dtype.kind not in "biuf":
         raise TypeError(f"values must be numbers, not an array of dtype {arr.dtype}")
