@@ -103,7 +103,7 @@ cdef struct SoftSoftness:
     cpFloat massScale
     cpFloat impulseScale
 
-cdef SoftSoftness SoftMakeSoftOmega(cpFloat omega, cpFloat zeta, cpFloat h) noexcept nogil
+cdef SoftSoftness SoftMakeSoft(cpFloat hertz, cpFloat zeta, cpFloat h) noexcept nogil
 
 cdef void SoftSettingsInit(cpSoftSettings *settings) noexcept nogil
 cdef void SoftScratchFree(cpSoftScratch *scratch) noexcept nogil

@@ -73,18 +73,18 @@ cdef cpFloat SoftSpeculative(const cpSpace *space) noexcept nogil:
         return space.soft.speculative
     return SOFT_SPECULATIVE_PER_SLOP * space.collisionSlop
 
-cdef SoftSoftness SoftMakeSoftOmega(cpFloat omega, cpFloat zeta, cpFloat h) noexcept nogil:
+cdef SoftSoftness SoftMakeSoft(cpFloat hertz, cpFloat zeta, cpFloat h) noexcept nogil:
     # The implicit (backward Euler) mass-spring-damper as a velocity
     # constraint: biasRate turns a separation into a target speed, massScale
     # and impulseScale soften the effective mass and the accumulated impulse.
-    # omega is the angular frequency (2 pi hertz).
     cdef SoftSoftness s
-    cdef cpFloat a1, a2, a3
-    if omega == 0.0:
+    cdef cpFloat omega, a1, a2, a3
+    if hertz == 0.0:
         s.biasRate = 0.0
         s.massScale = 1.0
         s.impulseScale = 0.0
         return s
+    omega = 2.0 * 3.14159265358979323846 * hertz
     a1 = 2.0 * zeta + h * omega
     a2 = h * omega * a1
     a3 = 1.0 / (1.0 + a2)
@@ -92,9 +92,6 @@ cdef SoftSoftness SoftMakeSoftOmega(cpFloat omega, cpFloat zeta, cpFloat h) noex
     s.massScale = a2 * a3
     s.impulseScale = a3
     return s
-
-cdef inline cpFloat SoftOmega(cpFloat hertz) noexcept nogil:
-    return 2.0 * 3.14159265358979323846 * hertz
 
 
 # -- scratch memory (grown, never shrunk) ---------------------------------------------
@@ -132,8 +129,6 @@ cdef struct SoftContext:
     cpFloat pushOut
     SoftSoftness contactSoft  # between two movable bodies
     SoftSoftness staticSoft   # against an immovable one (twice as stiff)
-    cpFloat contactOmega, staticOmega, dampingRatio
-    cpFloat maxDeflection     # a loaded point is stiffened to settle at most this deep
 
 cdef inline int SoftIndex(cpBody *body, SoftBody *bodies, int count) noexcept nogil:
     # The slot of an awake body, or 0 (static, sleeping, removed).
@@ -327,24 +322,23 @@ cdef inline cpFloat SoftMaxStiffening(SoftBody *a, SoftBody *b) noexcept nogil:
     hi = fmax(a.m_inv, b.m_inv)
     return fmax(SOFT_MIN_STIFFENING_CAP, SOFT_MAX_STIFFENING * (lo / hi))
 
-cdef inline void SoftPointSoftness(SoftPoint *sp, SoftSoftness *base, cpFloat omega,
-                                   cpFloat load, cpFloat size, cpFloat maxStiffening,
-                                   SoftContext *ctx) noexcept nogil:
+cdef inline void SoftPointSoftness(SoftPoint *sp, SoftSoftness *base, cpFloat load,
+                                   cpFloat size, cpFloat maxStiffening, cpFloat h) noexcept nogil:
     # A soft contact settles where its bias balances the impulse it leaks:
     # (compliance / normalMass) * impulse = biasRate * depth. Under a load F
     # (impulse F h per substep) it sinks compliance F h / (normalMass
     # biasRate) deep, so the bottom of a tall stack or
     # pyramid, or a light body under a heavy one, would sink far more than
-    # the top. A point whose last-step load would sink it deeper than
-    # ctx.maxDeflection x `size` leaks less (a smaller compliance); its bias
+    # the top. A point whose (filtered) load would sink it deeper than
+    # SOFT_MAX_LOAD_DEFLECTION x `size` leaks less (a smaller compliance); its bias
     # rate, which sets how fast overlap is pushed out, stays. That is the
     # implicit spring-damper with stiffness and damping both scaled up by
     # the same factor, so its damping ratio is kept.
     cdef cpFloat c, need
     cdef SoftSoftness s = base[0]
     c = s.impulseScale / s.massScale if s.massScale > 0.0 else 0.0
-    if load > 0.0 and ctx.maxDeflection > 0.0 and c > 0.0 and size > 0.0:
-        need = ctx.maxDeflection * size * sp.normalMass * s.biasRate / (load * ctx.h)
+    if load > 0.0 and c > 0.0 and size > 0.0:
+        need = SOFT_MAX_LOAD_DEFLECTION * size * sp.normalMass * s.biasRate / (load * h)
         if need < c / maxStiffening:
             need = c / maxStiffening
         if need < c:
@@ -368,7 +362,7 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     cdef SoftBody *a
     cdef SoftBody *b
     cdef SoftSoftness soft
-    cdef cpFloat nx, ny, rnA, rnB, rtA, rtB, kN, kT, sep, warm, omega, size, load
+    cdef cpFloat nx, ny, rnA, rnB, rtA, rtB, kN, kT, sep, warm, size, load
     cdef cpFloat maxStiffening
     cdef cpFloat warmCoef = ctx.h / prev_dt if prev_dt != 0.0 else 0.0
     cdef cpFloat loadCoef = 1.0 / prev_dt if prev_dt != 0.0 else 0.0
@@ -406,12 +400,8 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
         # Chipmunk adds surface_vr to the relative velocity; only its
         # tangential part is used for friction.
         sc.surfaceT = -arb.surface_vr.x * ny + arb.surface_vr.y * nx
-        if (a.m_inv == 0.0 and a.i_inv == 0.0) or (b.m_inv == 0.0 and b.i_inv == 0.0):
-            soft = ctx.staticSoft
-            omega = ctx.staticOmega
-        else:
-            soft = ctx.contactSoft
-            omega = ctx.contactOmega
+        soft = (ctx.staticSoft if (a.m_inv == 0.0 and a.i_inv == 0.0)
+                or (b.m_inv == 0.0 and b.i_inv == 0.0) else ctx.contactSoft)
         sc.block = 0
         # Chipmunk skips the warm start of an arbiter's first step.
         warm = 0.0 if arb.state == CP_ARBITER_STATE_FIRST_COLLISION else warmCoef
@@ -442,7 +432,7 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
             load = con.jBias + SOFT_LOAD_SMOOTHING * (con.jnAcc * loadCoef - con.jBias)
             if warm == 0.0:
                 load = 0.0
-            SoftPointSoftness(sp, &soft, omega, load, size, maxStiffening, ctx)
+            SoftPointSoftness(sp, &soft, load, size, maxStiffening, ctx.h)
             # Separation now, less the anchors' part, which the solver adds
             # back from the bodies' motion within the step.
             sep = ((sp.rBx - sp.rAx + arb.body_b.p.x - arb.body_a.p.x) * nx
@@ -872,16 +862,12 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     hertz = space.soft.contactHertz
     if hertz > 0.25 * ctx.inv_h:
         hertz = 0.25 * ctx.inv_h
-    ctx.dampingRatio = space.soft.contactDampingRatio
-    ctx.contactOmega = SoftOmega(hertz)
-    ctx.contactSoft = SoftMakeSoftOmega(ctx.contactOmega, ctx.dampingRatio, ctx.h)
+    ctx.contactSoft = SoftMakeSoft(hertz, space.soft.contactDampingRatio, ctx.h)
     # Against immovable bodies twice as stiff, within the same cap.
     staticHertz = 2.0 * hertz
     if staticHertz > 0.25 * ctx.inv_h:
         staticHertz = 0.25 * ctx.inv_h
-    ctx.staticOmega = SoftOmega(staticHertz)
-    ctx.staticSoft = SoftMakeSoftOmega(ctx.staticOmega, ctx.dampingRatio, ctx.h)
-    ctx.maxDeflection = SOFT_MAX_LOAD_DEFLECTION
+    ctx.staticSoft = SoftMakeSoft(staticHertz, space.soft.contactDampingRatio, ctx.h)
     ctx.contactCount = 0
     ctx.jointBodyCount = 0
     space.collideMargin = SoftSpeculative(space)
