@@ -267,7 +267,7 @@ def test_pin_joint_pendulum_keeps_its_length():
         assert abs(bob.position.length - 100.0) < 1.0
 
 
-def _chain(solver, collide=True):
+def _chain(solver, collide=True, windows=1):
     s = tamias2d.Space(solver=solver)
     s.gravity = 0, -900
     prev = s.static_body
@@ -282,12 +282,14 @@ def _chain(solver, collide=True):
         s.add(tamias2d.PivotJoint(prev, b, (20 * i, 0)))
         prev = b
         links.append(b)
-    worst = 0.0
-    for _ in range(300):
+    # The worst stretch of a pivot in each window of 300 steps.
+    worst = [0.0] * windows
+    for i in range(300 * windows):
         s.step(DT)
         for a, b in zip(links, links[1:]):
-            worst = max(worst, (a.local_to_world((10, 0)) - b.local_to_world((-10, 0))).length)
-    return worst
+            stretch = (a.local_to_world((10, 0)) - b.local_to_world((-10, 0))).length
+            worst[i // 300] = max(worst[i // 300], stretch)
+    return worst[0] if windows == 1 else worst
 
 
 def test_pivot_chain_holds_better_than_chipmunk():
@@ -300,10 +302,14 @@ def test_pivot_chain_holds_better_than_chipmunk():
 def test_pivot_chain_whose_links_collide_at_the_joints_stays_bounded():
     # the links' rounded ends overlap by 4 at every pivot (collide_bodies):
     # the contacts push the joints apart in both solvers; the soft solver,
-    # which pushes out all overlap rather than leaving collision_slop,
-    # somewhat more (6.7 against 5.1). Neither runs away.
-    assert _chain("soft") < 0.4 * 20
-    assert _chain("chipmunk") < 0.4 * 20
+    # which pushes out all overlap rather than leaving collision_slop, more
+    # (8.8 against 5.1 in the first 300 steps: its contacts are solved
+    # colour by colour, which settles this tug of war later than solving
+    # them along the chain did, 6.7). Neither runs away: over 900 steps the
+    # stretch stays under half a link (soft 8.8, chipmunk 7.2).
+    for solver in ("soft", "chipmunk"):
+        worst = _chain(solver, windows=3)
+        assert max(worst) < 0.5 * 20, (solver, worst)
 
 
 def test_motor_reaches_its_rate():
@@ -545,3 +551,37 @@ def test_is_bullet_survives_copy_and_pickle():
     for twin in (s.copy(), pickle.loads(pickle.dumps(s)), copy.deepcopy(b), pickle.loads(pickle.dumps(b))):
         bodies = list(twin.bodies) if isinstance(twin, tamias2d.Space) else [twin]
         assert bodies[0].is_bullet is True
+
+
+# -- the contact kernels: vector and scalar paths ---------------------------------------
+
+def _state_after(build, steps):
+    s = build()
+    s.solver = "soft"
+    hook = getattr(s, "scene_hook", None)
+    for i in range(steps):
+        if hook is not None:
+            hook(i)
+        s.step(DT)
+    return [(tuple(b.position), b.angle, tuple(b.velocity), b.angular_velocity) for b in s.bodies]
+
+
+@pytest.mark.parametrize("scene", ["pyramid", "rain", "drum", "mixed"])
+def test_vector_and_scalar_kernels_give_the_same_bits(scene):
+    # The scalar path is what a compiler without vector extensions builds
+    # (MSVC); it must be the same solver, not a near one.
+    import scenes
+    from tamias2d import _soft_step
+    if not _soft_step._lanes_have_simd():
+        pytest.skip("this build has only the scalar kernels")
+    build = lambda: getattr(scenes, scene)(tamias2d)
+    try:
+        _soft_step._lanes_use_scalar(False)
+        vector = _state_after(build, 120)
+        assert _soft_step._lanes_use_scalar(True)
+        scalar = _state_after(build, 120)
+    finally:
+        _soft_step._lanes_use_scalar(False)
+    assert len(vector) == len(scalar)
+    for i, (v, s) in enumerate(zip(vector, scalar)):
+        assert repr(v) == repr(s), f"body {i}: {v} != {s}"

@@ -51,6 +51,8 @@ cdef const cpFloat SOFT_MIN_STIFFENING_CAP = 5.0
 # ... and the load it is stiffened for moves this fraction of the way to the
 # last step's load per step (a low-pass filter).
 cdef const cpFloat SOFT_LOAD_SMOOTHING = 0.1
+# A point's first steps average its loads instead (1 / age), up to this age.
+cdef const cpFloat SOFT_LOAD_AGE = 10.0
 
 # Flags of a SoftBody.
 cdef enum:
@@ -59,13 +61,66 @@ cdef enum:
     SOFT_BODY_KINEMATIC = 4
     SOFT_BODY_JOINTED = 8            # in a joint: cpBody kept current per substep
 
-# One awake body during a soft step. Slot 0 stands for every body the step
-# does not move (static, sleeping, removed): zero velocity, infinite mass.
+# Contacts are coloured so that no two of one colour share a movable body
+# (Box2D's constraint graph, b2_graphColorCount); those that fit no colour,
+# and two-point manifolds too ill-conditioned for the block solve, are the
+# overflow, solved one by one after the colours.
+cdef enum:
+    SOFT_GRAPH_COLORS = 24
+
+# The kernels over lanes of contacts (SoftState, SoftLanes): _soft_lanes.h.
+cdef extern from "_soft_lanes.h" nogil:
+    enum: SOFT_LANES
+    ctypedef struct SoftState:
+        cpFloat vx, vy, w
+        cpFloat dpx, dpy
+        cpFloat qc, qs
+    ctypedef struct SoftLanes:
+        int ia[SOFT_LANES]
+        int ib[SOFT_LANES]
+        int wa[SOFT_LANES]
+        int wb[SOFT_LANES]
+        int src[SOFT_LANES]
+        cpFloat mA[SOFT_LANES]
+        cpFloat iA[SOFT_LANES]
+        cpFloat mB[SOFT_LANES]
+        cpFloat iB[SOFT_LANES]
+        cpFloat nx[SOFT_LANES]
+        cpFloat ny[SOFT_LANES]
+        cpFloat friction[SOFT_LANES]
+        cpFloat surfaceT[SOFT_LANES]
+        cpFloat k11[SOFT_LANES]
+        cpFloat k12[SOFT_LANES]
+        cpFloat k22[SOFT_LANES]
+        cpFloat rAx[2][SOFT_LANES]
+        cpFloat rAy[2][SOFT_LANES]
+        cpFloat rBx[2][SOFT_LANES]
+        cpFloat rBy[2][SOFT_LANES]
+        cpFloat rnA[2][SOFT_LANES]
+        cpFloat rnB[2][SOFT_LANES]
+        cpFloat rtA[2][SOFT_LANES]
+        cpFloat rtB[2][SOFT_LANES]
+        cpFloat base[2][SOFT_LANES]
+        cpFloat biasRate[2][SOFT_LANES]
+        cpFloat compliance[2][SOFT_LANES]
+        cpFloat tangentMass[2][SOFT_LANES]
+        cpFloat normalImpulse[2][SOFT_LANES]
+        cpFloat tangentImpulse[2][SOFT_LANES]
+        cpFloat maxNormalImpulse[2][SOFT_LANES]
+        cpFloat totalNormal[2][SOFT_LANES]
+        cpFloat totalTangent[2][SOFT_LANES]
+    void SoftLanesClear(SoftLanes *c, int k, int j)
+    void SoftLanesWarmStart(SoftLanes *c, SoftState *st)
+    void SoftLanesSolve(SoftLanes *c, SoftState *st, cpFloat inv_h, cpFloat pushOut, int useBias)
+    int SoftLanesHaveSimd()
+    void SoftLanesSetScalar(int on)
+    int SoftLanesScalar()
+
+# One awake body during a soft step, beside its SoftState (same slot). Slot
+# 0 stands for every body the step does not move (static, sleeping,
+# removed): zero velocity, infinite mass.
 cdef struct SoftBody:
-    cpFloat vx, vy, w
     cpFloat m_inv, i_inv
-    cpFloat dpx, dpy          # centre displacement since the step began
-    cpFloat qc, qs            # rotation since the step began (cos, sin)
     cpBody *body
     int flags
     int contacts              # arbiters touching it this step (SoftPrepareContacts)
@@ -87,7 +142,7 @@ cdef struct SoftPoint:
 
 # One arbiter's contact constraint, prepared once per step.
 cdef struct SoftContact:
-    int ia, ib                # SoftBody slots
+    int ia, ib                # SoftBody / SoftState slots
     int count                 # 1 or 2 points
     cpFloat nx, ny
     cpFloat friction, restitution

@@ -30,6 +30,8 @@ allocation, no Python except user integrators and joints' callbacks. Graph
 colouring and SIMD lanes can partition these arrays later.
 """
 from libc.math cimport INFINITY, pow, sqrt, cos, sin, fabs, fmin, fmax
+from libc.stdint cimport uint64_t
+from libc.string cimport memset
 from tamias2d._config cimport cpFloat, cpBool
 from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, cpArray, cpConstraint,
     cpSoftSettings, cpSoftScratch, TAMIAS_SOLVER_CHIPMUNK, TAMIAS_SOLVER_SOFT,
@@ -53,15 +55,11 @@ cdef void SoftSettingsInit(cpSoftSettings *settings) noexcept nogil:
     settings.speculative = -1.0
 
 cdef void SoftScratchFree(cpSoftScratch *scratch) noexcept nogil:
-    cpfree(scratch.bodies)
-    cpfree(scratch.contacts)
-    cpfree(scratch.jointBodies)
-    scratch.bodies = NULL
-    scratch.contacts = NULL
-    scratch.jointBodies = NULL
-    scratch.bodyCap = 0
-    scratch.contactCap = 0
-    scratch.jointBodyCap = 0
+    cdef int i
+    for i in range(SOFT_SCRATCH_COUNT):
+        cpfree(scratch.buf[i])
+        scratch.buf[i] = NULL
+        scratch.cap[i] = 0
 
 cdef cpFloat SoftPushOut(const cpSpace *space) noexcept nogil:
     if space.soft.pushOut >= 0.0:
@@ -96,20 +94,34 @@ cdef SoftSoftness SoftMakeSoft(cpFloat hertz, cpFloat zeta, cpFloat h) noexcept 
 
 # -- scratch memory (grown, never shrunk) ---------------------------------------------
 
-cdef bint _reserve(void **ptr, int *cap, int need, size_t size) noexcept nogil:
+cdef enum:
+    SOFT_SCRATCH_BODIES = 0
+    SOFT_SCRATCH_STATES
+    SOFT_SCRATCH_CONTACTS
+    SOFT_SCRATCH_LANES
+    SOFT_SCRATCH_COLORS       # each contact's colour
+    SOFT_SCRATCH_BITS         # the colours' body bitsets
+    SOFT_SCRATCH_OVERFLOW
+    SOFT_SCRATCH_JOINT_BODIES
+    SOFT_SCRATCH_COUNT
+
+cdef void *_reserve(cpSpace *space, int which, int need, size_t size) noexcept nogil:
+    # Room for `need` elements of `size` bytes in scratch buffer `which`, or
+    # NULL (the out-of-memory flag is up; the step solves nothing).
+    cdef cpSoftScratch *scratch = &space.softScratch
     cdef int n
     cdef void *grown
-    if need <= cap[0]:
-        return 1
-    n = cap[0] * 2 if cap[0] > 0 else 64
+    if need <= scratch.cap[which] and scratch.buf[which] != NULL:
+        return scratch.buf[which]
+    n = scratch.cap[which] * 2 if scratch.cap[which] > 0 else 64
     while n < need:
         n *= 2
-    grown = cprealloc(ptr[0], <size_t>n * size)
+    grown = cprealloc(scratch.buf[which], <size_t>n * size)
     if grown == NULL:
-        return 0  # the out-of-memory flag is up; the step solves nothing
-    ptr[0] = grown
-    cap[0] = n
-    return 1
+        return NULL
+    scratch.buf[which] = grown
+    scratch.cap[which] = n
+    return grown
 
 
 # -- the step's context -----------------------------------------------------------------
@@ -117,9 +129,14 @@ cdef bint _reserve(void **ptr, int *cap, int need, size_t size) noexcept nogil:
 cdef struct SoftContext:
     cpSpace *space
     SoftBody *bodies
+    SoftState *states         # the bodies' solver state, same slots
     int bodyCount             # slots, the immovable slot 0 included
     SoftContact *contacts
     int contactCount
+    SoftLanes *lanes          # the coloured contacts, colour by colour
+    int colorLanes[SOFT_GRAPH_COLORS + 1]   # colour c: lanes[colorLanes[c]:colorLanes[c+1]]
+    int *overflow             # SoftContact indices solved one by one
+    int overflowCount
     int *jointBodies          # slots touched by joints
     int jointBodyCount
     int substeps
@@ -156,32 +173,33 @@ cdef bint SoftGatherBodies(SoftContext *ctx) noexcept nogil:
     cdef int n = arr.num + 1
     cdef int i
     cdef SoftBody *sb
+    cdef SoftState *st
     cdef cpBody *body
-    if not _reserve(&space.softScratch.bodies, &space.softScratch.bodyCap, n, sizeof(SoftBody)):
+    ctx.bodies = <SoftBody *>_reserve(space, SOFT_SCRATCH_BODIES, n, sizeof(SoftBody))
+    ctx.states = <SoftState *>_reserve(space, SOFT_SCRATCH_STATES, n, sizeof(SoftState))
+    if ctx.bodies == NULL or ctx.states == NULL:
         return 0
-    ctx.bodies = <SoftBody *>space.softScratch.bodies
     ctx.bodyCount = n
+    memset(&ctx.states[0], 0, sizeof(SoftState))
+    ctx.states[0].qc = 1.0
     sb = &ctx.bodies[0]
-    sb.vx = sb.vy = sb.w = 0.0
     sb.m_inv = sb.i_inv = 0.0
-    sb.dpx = sb.dpy = 0.0
-    sb.qc = 1.0
-    sb.qs = 0.0
     sb.body = NULL
     sb.flags = 0
     sb.contacts = 0
     for i in range(1, n):
         body = <cpBody *>arr.arr[i - 1]
         body.solverIndex = i
+        st = &ctx.states[i]
+        st.vx = body.v.x
+        st.vy = body.v.y
+        st.w = body.w
+        st.dpx = st.dpy = 0.0
+        st.qc = 1.0
+        st.qs = 0.0
         sb = &ctx.bodies[i]
-        sb.vx = body.v.x
-        sb.vy = body.v.y
-        sb.w = body.w
         sb.m_inv = body.m_inv
         sb.i_inv = body.i_inv
-        sb.dpx = sb.dpy = 0.0
-        sb.qc = 1.0
-        sb.qs = 0.0
         sb.body = body
         sb.flags = 0
         sb.contacts = 0
@@ -211,10 +229,10 @@ cdef bint SoftPrepareJoints(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     ctx.jointBodies = NULL
     if constraints.num == 0:
         return 1
-    if not _reserve(&space.softScratch.jointBodies, &space.softScratch.jointBodyCap,
-                    2 * constraints.num, sizeof(int)):
+    ctx.jointBodies = <int *>_reserve(space, SOFT_SCRATCH_JOINT_BODIES, 2 * constraints.num,
+                                      sizeof(int))
+    if ctx.jointBodies == NULL:
         return 0
-    ctx.jointBodies = <int *>space.softScratch.jointBodies
     for i in range(constraints.num):
         c = <cpConstraint *>constraints.arr[i]
         if c.preSolve != NULL:
@@ -233,22 +251,24 @@ cdef bint SoftPrepareJoints(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     return 1
 
 cdef inline void SoftScatterJointBodies(SoftContext *ctx) noexcept nogil:
-    cdef int i
-    cdef SoftBody *sb
+    cdef int i, slot
+    cdef cpBody *body
     for i in range(ctx.jointBodyCount):
-        sb = &ctx.bodies[ctx.jointBodies[i]]
-        sb.body.v.x = sb.vx
-        sb.body.v.y = sb.vy
-        sb.body.w = sb.w
+        slot = ctx.jointBodies[i]
+        body = ctx.bodies[slot].body
+        body.v.x = ctx.states[slot].vx
+        body.v.y = ctx.states[slot].vy
+        body.w = ctx.states[slot].w
 
 cdef inline void SoftGatherJointBodies(SoftContext *ctx) noexcept nogil:
-    cdef int i
-    cdef SoftBody *sb
+    cdef int i, slot
+    cdef cpBody *body
     for i in range(ctx.jointBodyCount):
-        sb = &ctx.bodies[ctx.jointBodies[i]]
-        sb.vx = sb.body.v.x
-        sb.vy = sb.body.v.y
-        sb.w = sb.body.w
+        slot = ctx.jointBodies[i]
+        body = ctx.bodies[slot].body
+        ctx.states[slot].vx = body.v.x
+        ctx.states[slot].vy = body.v.y
+        ctx.states[slot].w = body.w
 
 cdef void SoftJointsWarmStart(SoftContext *ctx) noexcept nogil:
     cdef cpArray *constraints = ctx.space.constraints
@@ -363,13 +383,15 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     cdef SoftBody *b
     cdef SoftSoftness soft
     cdef cpFloat nx, ny, rnA, rnB, rtA, rtB, kN, kT, sep, warm, size, load
-    cdef cpFloat maxStiffening
+    cdef cpFloat maxStiffening, age, smoothing
     cdef cpFloat warmCoef = ctx.h / prev_dt if prev_dt != 0.0 else 0.0
     cdef cpFloat loadCoef = 1.0 / prev_dt if prev_dt != 0.0 else 0.0
-    if not _reserve(&space.softScratch.contacts, &space.softScratch.contactCap,
-                    arbiters.num, sizeof(SoftContact)):
+    cdef SoftState *sa
+    cdef SoftState *sb
+    ctx.contacts = <SoftContact *>_reserve(space, SOFT_SCRATCH_CONTACTS, arbiters.num,
+                                           sizeof(SoftContact))
+    if ctx.contacts == NULL:
         return 0
-    ctx.contacts = <SoftContact *>space.softScratch.contacts
     # Each body's number of contacts: a contact is stiffened for its load
     # only where both of its bodies have at most two (SoftMaxStiffening).
     for i in range(arbiters.num):
@@ -388,6 +410,8 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
         sc.ib = SoftIndex(arb.body_b, ctx.bodies, ctx.bodyCount)
         a = &ctx.bodies[sc.ia]
         b = &ctx.bodies[sc.ib]
+        sa = &ctx.states[sc.ia]
+        sb = &ctx.states[sc.ib]
         sc.count = arb.count if arb.count <= 2 else 2
         size = SoftContactSize(arb)
         maxStiffening = SoftMaxStiffening(a, b)
@@ -429,17 +453,27 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
             # slowly (con.jBias, unused by this solver, carries it between
             # steps): following every spike and dip makes a loaded stack
             # breathe and a big pyramid shake itself apart.
-            load = con.jBias + SOFT_LOAD_SMOOTHING * (con.jnAcc * loadCoef - con.jBias)
+            # A young point (con.bias counts its steps) averages the loads it
+            # has seen, so a scene that starts at rest is stiff within a few
+            # steps instead of sagging while the filter catches up.
+            age = con.bias if con.bias >= 0.0 else 0.0
+            if age > SOFT_LOAD_AGE:
+                age = SOFT_LOAD_AGE
+            smoothing = 1.0 / age if age >= 1.0 else 1.0
+            if smoothing < SOFT_LOAD_SMOOTHING:
+                smoothing = SOFT_LOAD_SMOOTHING
+            load = con.jBias + smoothing * (con.jnAcc * loadCoef - con.jBias)
             if warm == 0.0:
                 load = 0.0
+                age = 0.0
             SoftPointSoftness(sp, &soft, load, size, maxStiffening, ctx.h)
             # Separation now, less the anchors' part, which the solver adds
             # back from the bodies' motion within the step.
             sep = ((sp.rBx - sp.rAx + arb.body_b.p.x - arb.body_a.p.x) * nx
                    + (sp.rBy - sp.rAy + arb.body_b.p.y - arb.body_a.p.y) * ny)
             sp.baseSeparation = sep - ((sp.rBx - sp.rAx) * nx + (sp.rBy - sp.rAy) * ny)
-            sp.relativeVelocity = ((b.vx - b.w * sp.rBy - a.vx + a.w * sp.rAy) * nx
-                                   + (b.vy + b.w * sp.rBx - a.vy - a.w * sp.rAx) * ny)
+            sp.relativeVelocity = ((sb.vx - sb.w * sp.rBy - sa.vx + sa.w * sp.rAy) * nx
+                                   + (sb.vy + sb.w * sp.rBx - sa.vy - sa.w * sp.rAx) * ny)
             sp.normalImpulse = con.jnAcc * warm
             sp.tangentImpulse = con.jtAcc * warm
             sp.totalNormal = 0.0
@@ -448,7 +482,7 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
             # Chipmunk's fields, for Arbiter.total_ke and the like.
             con.nMass = sp.normalMass
             con.tMass = sp.tangentMass
-            con.bias = 0.0
+            con.bias = age + 1.0
             con.jBias = load
             con.bounce = sp.relativeVelocity * arb.e
         if sc.count == 2:
@@ -479,17 +513,153 @@ cdef inline void SoftPrepareBlock(SoftContact *sc, SoftBody *a, SoftBody *b) noe
     sc.block = (sc.k11 > 0.0 and sc.k22 > 0.0 and
                 sc.k11 * sc.k11 < SOFT_BLOCK_MAX_CONDITION * (sc.k11 * sc.k22 - sc.k12 * sc.k12))
 
+# -- the constraint graph: colours and lanes ------------------------------------------
+
+cdef inline bint SoftMovable(SoftContext *ctx, int slot) noexcept nogil:
+    # A body a contact writes to: awake and of finite mass. Immovable ones
+    # (static, kinematic, sleeping) are shared freely between contacts of a
+    # colour; they are read, never written.
+    return slot != 0 and (ctx.bodies[slot].m_inv != 0.0 or ctx.bodies[slot].i_inv != 0.0)
+
+cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
+    # Greedy colouring in arbiter order (so a copy continues alike): each
+    # contact takes the first colour that holds neither of its movable
+    # bodies; then each colour's contacts are packed SOFT_LANES to a lane.
+    cdef cpSpace *space = ctx.space
+    cdef int n = ctx.contactCount
+    cdef int words = (ctx.bodyCount + 63) >> 6
+    cdef int i, c, col, a, b, k, total
+    cdef uint64_t *bits
+    cdef uint64_t *row
+    cdef int *color
+    cdef SoftContact *sc
+    cdef SoftLanes *ln
+    cdef int counts[SOFT_GRAPH_COLORS]
+    cdef int fill[SOFT_GRAPH_COLORS]
+    bits = <uint64_t *>_reserve(space, SOFT_SCRATCH_BITS, SOFT_GRAPH_COLORS * words, sizeof(uint64_t))
+    color = <int *>_reserve(space, SOFT_SCRATCH_COLORS, n, sizeof(int))
+    ctx.overflow = <int *>_reserve(space, SOFT_SCRATCH_OVERFLOW, n, sizeof(int))
+    if bits == NULL or color == NULL or ctx.overflow == NULL:
+        return 0
+    memset(bits, 0, <size_t>SOFT_GRAPH_COLORS * words * sizeof(uint64_t))
+    for c in range(SOFT_GRAPH_COLORS):
+        counts[c] = 0
+        fill[c] = 0
+    ctx.overflowCount = 0
+    for i in range(n):
+        sc = &ctx.contacts[i]
+        col = SOFT_GRAPH_COLORS
+        if sc.block or (sc.count == 1 and sc.p[0].normalMass > 0.0):
+            a = sc.ia if SoftMovable(ctx, sc.ia) else 0
+            b = sc.ib if SoftMovable(ctx, sc.ib) else 0
+            # As Box2D: a contact with an immovable body never takes colour
+            # 0, so the first colour is solved between movable bodies only.
+            for c in range(0 if (a != 0 and b != 0) else 1, SOFT_GRAPH_COLORS):
+                row = bits + c * words
+                if a != 0 and (row[a >> 6] >> (a & 63)) & 1:
+                    continue
+                if b != 0 and (row[b >> 6] >> (b & 63)) & 1:
+                    continue
+                if a != 0:
+                    row[a >> 6] |= (<uint64_t>1) << (a & 63)
+                if b != 0:
+                    row[b >> 6] |= (<uint64_t>1) << (b & 63)
+                col = c
+                break
+        color[i] = col
+        if col == SOFT_GRAPH_COLORS:
+            ctx.overflow[ctx.overflowCount] = i
+            ctx.overflowCount += 1
+        else:
+            counts[col] += 1
+    total = 0
+    for c in range(SOFT_GRAPH_COLORS):
+        ctx.colorLanes[c] = total
+        total += (counts[c] + SOFT_LANES - 1) // SOFT_LANES
+    ctx.colorLanes[SOFT_GRAPH_COLORS] = total
+    ctx.lanes = <SoftLanes *>_reserve(space, SOFT_SCRATCH_LANES, total, sizeof(SoftLanes))
+    if ctx.lanes == NULL:
+        return 0
+    for i in range(n):
+        c = color[i]
+        if c == SOFT_GRAPH_COLORS:
+            continue
+        SoftPackLane(ctx, &ctx.lanes[ctx.colorLanes[c] + fill[c] // SOFT_LANES],
+                     fill[c] % SOFT_LANES, i)
+        fill[c] += 1
+    for c in range(SOFT_GRAPH_COLORS):
+        # A colour's last lane may be part empty.
+        if fill[c] % SOFT_LANES != 0:
+            ln = &ctx.lanes[ctx.colorLanes[c + 1] - 1]
+            for k in range(fill[c] % SOFT_LANES, SOFT_LANES):
+                SoftLanesClear(ln, k, -1)
+    return 1
+
+cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, int k, int i) noexcept nogil:
+    cdef SoftContact *sc = &ctx.contacts[i]
+    cdef SoftBody *a = &ctx.bodies[sc.ia]
+    cdef SoftBody *b = &ctx.bodies[sc.ib]
+    cdef SoftPoint *sp
+    cdef int j
+    ln.ia[k] = sc.ia
+    ln.ib[k] = sc.ib
+    ln.wa[k] = SoftMovable(ctx, sc.ia)
+    ln.wb[k] = SoftMovable(ctx, sc.ib)
+    ln.src[k] = i
+    ln.mA[k] = a.m_inv
+    ln.iA[k] = a.i_inv
+    ln.mB[k] = b.m_inv
+    ln.iB[k] = b.i_inv
+    ln.nx[k] = sc.nx
+    ln.ny[k] = sc.ny
+    ln.friction[k] = sc.friction
+    ln.surfaceT[k] = sc.surfaceT
+    if sc.count == 2:
+        ln.k11[k] = sc.k11
+        ln.k12[k] = sc.k12
+        ln.k22[k] = sc.k22
+    else:
+        ln.k11[k] = 1.0 / sc.p[0].normalMass
+    for j in range(sc.count):
+        sp = &sc.p[j]
+        ln.rAx[j][k] = sp.rAx
+        ln.rAy[j][k] = sp.rAy
+        ln.rBx[j][k] = sp.rBx
+        ln.rBy[j][k] = sp.rBy
+        ln.rnA[j][k] = sp.rnA
+        ln.rnB[j][k] = sp.rnB
+        ln.rtA[j][k] = sp.rtA
+        ln.rtB[j][k] = sp.rtB
+        ln.base[j][k] = sp.baseSeparation
+        ln.biasRate[j][k] = sp.biasRate
+        ln.compliance[j][k] = sp.compliance
+        ln.tangentMass[j][k] = sp.tangentMass
+        ln.normalImpulse[j][k] = sp.normalImpulse
+        ln.tangentImpulse[j][k] = sp.tangentImpulse
+        ln.maxNormalImpulse[j][k] = 0.0
+        ln.totalNormal[j][k] = 0.0
+        ln.totalTangent[j][k] = 0.0
+    if sc.count == 1:
+        SoftLanesClear(ln, k, 1)
+
 cdef void SoftWarmStart(SoftContext *ctx) noexcept nogil:
+    # The coloured contacts lane by lane, then the overflow one by one.
     cdef int i, j
     cdef SoftContact *sc
     cdef SoftPoint *sp
     cdef SoftBody *a
     cdef SoftBody *b
+    cdef SoftState *sa
+    cdef SoftState *sb
     cdef cpFloat px, py, nx, ny
-    for i in range(ctx.contactCount):
-        sc = &ctx.contacts[i]
+    for i in range(ctx.colorLanes[SOFT_GRAPH_COLORS]):
+        SoftLanesWarmStart(&ctx.lanes[i], ctx.states)
+    for i in range(ctx.overflowCount):
+        sc = &ctx.contacts[ctx.overflow[i]]
         a = &ctx.bodies[sc.ia]
         b = &ctx.bodies[sc.ib]
+        sa = &ctx.states[sc.ia]
+        sb = &ctx.states[sc.ib]
         nx = sc.nx
         ny = sc.ny
         for j in range(sc.count):
@@ -497,25 +667,38 @@ cdef void SoftWarmStart(SoftContext *ctx) noexcept nogil:
             # P = normalImpulse n + tangentImpulse perp(n)
             px = sp.normalImpulse * nx - sp.tangentImpulse * ny
             py = sp.normalImpulse * ny + sp.tangentImpulse * nx
-            a.vx -= a.m_inv * px
-            a.vy -= a.m_inv * py
-            a.w -= a.i_inv * (sp.rAx * py - sp.rAy * px)
-            b.vx += b.m_inv * px
-            b.vy += b.m_inv * py
-            b.w += b.i_inv * (sp.rBx * py - sp.rBy * px)
+            if sc.ia != 0:
+                sa.vx -= a.m_inv * px
+                sa.vy -= a.m_inv * py
+                sa.w -= a.i_inv * (sp.rAx * py - sp.rAy * px)
+            if sc.ib != 0:
+                sb.vx += b.m_inv * px
+                sb.vy += b.m_inv * py
+                sb.w += b.i_inv * (sp.rBx * py - sp.rBy * px)
 
 cdef void SoftSolve(SoftContext *ctx, bint useBias) noexcept nogil:
     # One Gauss-Seidel pass over the contacts: with useBias the soft,
     # biased solve; without it the rigid relax pass, which also solves
-    # friction. Velocities along n and t are a shared linear part plus each
-    # point's angular part (cross products prepared once per step).
-    cdef int i, j
-    cdef SoftContact *sc
+    # friction. The coloured contacts lane by lane (_soft_lanes_kernels.h,
+    # the same arithmetic as below), then the overflow one by one.
+    cdef int i
+    for i in range(ctx.colorLanes[SOFT_GRAPH_COLORS]):
+        SoftLanesSolve(&ctx.lanes[i], ctx.states, ctx.inv_h, ctx.pushOut, useBias)
+    for i in range(ctx.overflowCount):
+        SoftSolveContact(ctx, &ctx.contacts[ctx.overflow[i]], useBias)
+
+cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias) noexcept nogil:
+    # One contact of the overflow. Velocities along n and t are a shared
+    # linear part plus each point's angular part (cross products prepared
+    # once per step).
+    cdef int j
     cdef SoftPoint *sp
     cdef SoftPoint *p1
     cdef SoftPoint *p2
     cdef SoftBody *a
     cdef SoftBody *b
+    cdef SoftState *sa
+    cdef SoftState *sb
     cdef cpFloat nx, ny, dx, dy, s, lin, vn, vt, imp, newImp, maxF
     cdef cpFloat prAx, prAy, prBx, prBy
     cdef cpFloat inv_h = ctx.inv_h
@@ -524,148 +707,150 @@ cdef void SoftSolve(SoftContext *ctx, bint useBias) noexcept nogil:
     cdef cpFloat a11, a22, a12, x01, x02, q1, q2, det, x1, x2, d1, d2
     cdef cpFloat bias[2]
     cdef cpFloat gamma[2]      # a soft row's compliance (0: rigid)
-    for i in range(ctx.contactCount):
-        sc = &ctx.contacts[i]
-        a = &ctx.bodies[sc.ia]
-        b = &ctx.bodies[sc.ib]
-        vax = a.vx
-        vay = a.vy
-        wa = a.w
-        vbx = b.vx
-        vby = b.vy
-        wb = b.w
-        mA = a.m_inv
-        iA = a.i_inv
-        mB = b.m_inv
-        iB = b.i_inv
-        nx = sc.nx
-        ny = sc.ny
+    a = &ctx.bodies[sc.ia]
+    b = &ctx.bodies[sc.ib]
+    sa = &ctx.states[sc.ia]
+    sb = &ctx.states[sc.ib]
+    vax = sa.vx
+    vay = sa.vy
+    wa = sa.w
+    vbx = sb.vx
+    vby = sb.vy
+    wb = sb.w
+    mA = a.m_inv
+    iA = a.i_inv
+    mB = b.m_inv
+    iB = b.i_inv
+    nx = sc.nx
+    ny = sc.ny
+    for j in range(sc.count):
+        sp = &sc.p[j]
+        # The current separation from the bodies' motion in this step.
+        prAx = sa.qc * sp.rAx - sa.qs * sp.rAy
+        prAy = sa.qs * sp.rAx + sa.qc * sp.rAy
+        prBx = sb.qc * sp.rBx - sb.qs * sp.rBy
+        prBy = sb.qs * sp.rBx + sb.qc * sp.rBy
+        dx = (sb.dpx - sa.dpx) + (prBx - prAx)
+        dy = (sb.dpy - sa.dpy) + (prBy - prAy)
+        s = dx * nx + dy * ny + sp.baseSeparation
+        if s > 0.0:
+            # Speculative: let the gap close within the substep, no push.
+            bias[j] = s * inv_h
+            gamma[j] = 0.0
+        elif useBias:
+            # Overlap is pushed out softly, at most at pushOut.
+            bias[j] = sp.biasRate * s
+            if bias[j] < -pushOut:
+                bias[j] = -pushOut
+            gamma[j] = sp.compliance
+        else:
+            bias[j] = 0.0
+            gamma[j] = 0.0
+    if sc.block:
+        # Both normal rows at once: the linear complementarity problem
+        # w = A x + q, x >= 0, w >= 0, x.w = 0 for the accumulated
+        # impulses x, with A = K + diag(k_ii gamma_i) and
+        # q = vn + bias - K x0. A soft row's added diagonal is the soft
+        # constraint written as a compliance: (k + k gamma) dx =
+        # -(vn + bias) - k gamma x0 is the sequential massScale /
+        # impulseScale update exactly. Cases in Box2D 2.x's order.
+        p1 = &sc.p[0]
+        p2 = &sc.p[1]
+        lin = (vbx - vax) * nx + (vby - vay) * ny
+        x01 = p1.normalImpulse
+        x02 = p2.normalImpulse
+        a12 = sc.k12
+        a11 = sc.k11 * (1.0 + gamma[0])
+        a22 = sc.k22 * (1.0 + gamma[1])
+        q1 = (lin + wb * p1.rnB - wa * p1.rnA + bias[0]
+              - (sc.k11 * x01 + a12 * x02))
+        q2 = (lin + wb * p2.rnB - wa * p2.rnA + bias[1]
+              - (a12 * x01 + sc.k22 * x02))
+        det = a11 * a22 - a12 * a12
+        x1 = (a12 * q2 - a22 * q1) / det
+        x2 = (a12 * q1 - a11 * q2) / det
+        if not (x1 >= 0.0 and x2 >= 0.0):
+            # Only the first point pushes.
+            x1 = -q1 / a11
+            x2 = 0.0
+            if not (x1 >= 0.0 and a12 * x1 + q2 >= 0.0):
+                # Only the second.
+                x1 = 0.0
+                x2 = -q2 / a22
+                if not (x2 >= 0.0 and a12 * x2 + q1 >= 0.0):
+                    # Neither: both separate; with no solution at all
+                    # (round-off) the impulses stay.
+                    x1 = 0.0
+                    x2 = 0.0
+                    if not (q1 >= 0.0 and q2 >= 0.0):
+                        x1 = x01
+                        x2 = x02
+        d1 = x1 - x01
+        d2 = x2 - x02
+        p1.normalImpulse = x1
+        p2.normalImpulse = x2
+        if x1 > p1.maxNormalImpulse:
+            p1.maxNormalImpulse = x1
+        if x2 > p2.maxNormalImpulse:
+            p2.maxNormalImpulse = x2
+        imp = d1 + d2
+        vax -= mA * imp * nx
+        vay -= mA * imp * ny
+        wa -= iA * (p1.rnA * d1 + p2.rnA * d2)
+        vbx += mB * imp * nx
+        vby += mB * imp * ny
+        wb += iB * (p1.rnB * d1 + p2.rnB * d2)
+    else:
         for j in range(sc.count):
             sp = &sc.p[j]
-            # The current separation from the bodies' motion in this step.
-            prAx = a.qc * sp.rAx - a.qs * sp.rAy
-            prAy = a.qs * sp.rAx + a.qc * sp.rAy
-            prBx = b.qc * sp.rBx - b.qs * sp.rBy
-            prBy = b.qs * sp.rBx + b.qc * sp.rBy
-            dx = (b.dpx - a.dpx) + (prBx - prAx)
-            dy = (b.dpy - a.dpy) + (prBy - prAy)
-            s = dx * nx + dy * ny + sp.baseSeparation
-            if s > 0.0:
-                # Speculative: let the gap close within the substep, no push.
-                bias[j] = s * inv_h
-                gamma[j] = 0.0
-            elif useBias:
-                # Overlap is pushed out softly, at most at pushOut.
-                bias[j] = sp.biasRate * s
-                if bias[j] < -pushOut:
-                    bias[j] = -pushOut
-                gamma[j] = sp.compliance
-            else:
-                bias[j] = 0.0
-                gamma[j] = 0.0
-        if sc.block:
-            # Both normal rows at once: the linear complementarity problem
-            # w = A x + q, x >= 0, w >= 0, x.w = 0 for the accumulated
-            # impulses x, with A = K + diag(k_ii gamma_i) and
-            # q = vn + bias - K x0. A soft row's added diagonal is the soft
-            # constraint written as a compliance: (k + k gamma) dx =
-            # -(vn + bias) - k gamma x0 is the sequential massScale /
-            # impulseScale update exactly. Cases in Box2D 2.x's order.
-            p1 = &sc.p[0]
-            p2 = &sc.p[1]
-            lin = (vbx - vax) * nx + (vby - vay) * ny
-            x01 = p1.normalImpulse
-            x02 = p2.normalImpulse
-            a12 = sc.k12
-            a11 = sc.k11 * (1.0 + gamma[0])
-            a22 = sc.k22 * (1.0 + gamma[1])
-            q1 = (lin + wb * p1.rnB - wa * p1.rnA + bias[0]
-                  - (sc.k11 * x01 + a12 * x02))
-            q2 = (lin + wb * p2.rnB - wa * p2.rnA + bias[1]
-                  - (a12 * x01 + sc.k22 * x02))
-            det = a11 * a22 - a12 * a12
-            x1 = (a12 * q2 - a22 * q1) / det
-            x2 = (a12 * q1 - a11 * q2) / det
-            if not (x1 >= 0.0 and x2 >= 0.0):
-                # Only the first point pushes.
-                x1 = -q1 / a11
-                x2 = 0.0
-                if not (x1 >= 0.0 and a12 * x1 + q2 >= 0.0):
-                    # Only the second.
-                    x1 = 0.0
-                    x2 = -q2 / a22
-                    if not (x2 >= 0.0 and a12 * x2 + q1 >= 0.0):
-                        # Neither: both separate; with no solution at all
-                        # (round-off) the impulses stay.
-                        x1 = 0.0
-                        x2 = 0.0
-                        if not (q1 >= 0.0 and q2 >= 0.0):
-                            x1 = x01
-                            x2 = x02
-            d1 = x1 - x01
-            d2 = x2 - x02
-            p1.normalImpulse = x1
-            p2.normalImpulse = x2
-            if x1 > p1.maxNormalImpulse:
-                p1.maxNormalImpulse = x1
-            if x2 > p2.maxNormalImpulse:
-                p2.maxNormalImpulse = x2
-            imp = d1 + d2
+            # (k + k gamma) dx = -(vn + bias) - k gamma x0, k = 1 / normalMass
+            vn = ((vbx - vax) * nx + (vby - vay) * ny) + wb * sp.rnB - wa * sp.rnA
+            imp = (-(sp.normalMass * (vn + bias[j]) + gamma[j] * sp.normalImpulse)
+                   / (1.0 + gamma[j]))
+            newImp = sp.normalImpulse + imp
+            if newImp < 0.0:
+                newImp = 0.0
+            imp = newImp - sp.normalImpulse
+            sp.normalImpulse = newImp
+            if newImp > sp.maxNormalImpulse:
+                sp.maxNormalImpulse = newImp
             vax -= mA * imp * nx
             vay -= mA * imp * ny
-            wa -= iA * (p1.rnA * d1 + p2.rnA * d2)
+            wa -= iA * imp * sp.rnA
             vbx += mB * imp * nx
             vby += mB * imp * ny
-            wb += iB * (p1.rnB * d1 + p2.rnB * d2)
-        else:
-            for j in range(sc.count):
-                sp = &sc.p[j]
-                # (k + k gamma) dx = -(vn + bias) - k gamma x0, k = 1 / normalMass
-                vn = ((vbx - vax) * nx + (vby - vay) * ny) + wb * sp.rnB - wa * sp.rnA
-                imp = (-(sp.normalMass * (vn + bias[j]) + gamma[j] * sp.normalImpulse)
-                       / (1.0 + gamma[j]))
-                newImp = sp.normalImpulse + imp
-                if newImp < 0.0:
-                    newImp = 0.0
-                imp = newImp - sp.normalImpulse
-                sp.normalImpulse = newImp
-                if newImp > sp.maxNormalImpulse:
-                    sp.maxNormalImpulse = newImp
-                vax -= mA * imp * nx
-                vay -= mA * imp * ny
-                wa -= iA * imp * sp.rnA
-                vbx += mB * imp * nx
-                vby += mB * imp * ny
-                wb += iB * imp * sp.rnB
-        if not useBias:
-            # Friction only in the relax pass, as Box2D 3.2 does: there the
-            # normal impulses that bound it are final for the substep.
-            # Tangent t = perp(n) = (-ny, nx).
-            for j in range(sc.count):
-                sp = &sc.p[j]
-                vt = ((vby - vay) * nx - (vbx - vax) * ny) + wb * sp.rtB - wa * sp.rtA + sc.surfaceT
-                imp = -sp.tangentMass * vt
-                maxF = sc.friction * sp.normalImpulse
-                newImp = sp.tangentImpulse + imp
-                if newImp < -maxF:
-                    newImp = -maxF
-                elif newImp > maxF:
-                    newImp = maxF
-                imp = newImp - sp.tangentImpulse
-                sp.tangentImpulse = newImp
-                vax += mA * imp * ny
-                vay -= mA * imp * nx
-                wa -= iA * imp * sp.rtA
-                vbx -= mB * imp * ny
-                vby += mB * imp * nx
-                wb += iB * imp * sp.rtB
-        # Slot 0 (immovable) takes no impulse: its inverse masses are 0.
-        a.vx = vax
-        a.vy = vay
-        a.w = wa
-        b.vx = vbx
-        b.vy = vby
-        b.w = wb
+            wb += iB * imp * sp.rnB
+    if not useBias:
+        # Friction only in the relax pass, as Box2D 3.2 does: there the
+        # normal impulses that bound it are final for the substep.
+        # Tangent t = perp(n) = (-ny, nx).
+        for j in range(sc.count):
+            sp = &sc.p[j]
+            vt = ((vby - vay) * nx - (vbx - vax) * ny) + wb * sp.rtB - wa * sp.rtA + sc.surfaceT
+            imp = -sp.tangentMass * vt
+            maxF = sc.friction * sp.normalImpulse
+            newImp = sp.tangentImpulse + imp
+            if newImp < -maxF:
+                newImp = -maxF
+            elif newImp > maxF:
+                newImp = maxF
+            imp = newImp - sp.tangentImpulse
+            sp.tangentImpulse = newImp
+            vax += mA * imp * ny
+            vay -= mA * imp * nx
+            wa -= iA * imp * sp.rtA
+            vbx -= mB * imp * ny
+            vby += mB * imp * nx
+            wb += iB * imp * sp.rtB
+    # Slot 0 (immovable) is never written: contacts on other threads read it.
+    if sc.ia != 0:
+        sa.vx = vax
+        sa.vy = vay
+        sa.w = wa
+    if sc.ib != 0:
+        sb.vx = vbx
+        sb.vy = vby
+        sb.w = wb
 
 cdef inline void SoftRelax(SoftContext *ctx) noexcept nogil:
     SoftSolve(ctx, 0)
@@ -673,13 +858,41 @@ cdef inline void SoftRelax(SoftContext *ctx) noexcept nogil:
 cdef void SoftAccumulate(SoftContext *ctx) noexcept nogil:
     # The impulse a substep applied is its accumulated impulse after the
     # relax pass (the warm start re-applies the previous one).
-    cdef int i, j
+    cdef int i, j, k
     cdef SoftContact *sc
-    for i in range(ctx.contactCount):
-        sc = &ctx.contacts[i]
+    cdef SoftLanes *ln
+    for i in range(ctx.colorLanes[SOFT_GRAPH_COLORS]):
+        ln = &ctx.lanes[i]
+        for j in range(2):
+            for k in range(SOFT_LANES):
+                ln.totalNormal[j][k] += ln.normalImpulse[j][k]
+                ln.totalTangent[j][k] += ln.tangentImpulse[j][k]
+    for i in range(ctx.overflowCount):
+        sc = &ctx.contacts[ctx.overflow[i]]
         for j in range(sc.count):
             sc.p[j].totalNormal += sc.p[j].normalImpulse
             sc.p[j].totalTangent += sc.p[j].tangentImpulse
+
+cdef void SoftUnpackLanes(SoftContext *ctx) noexcept nogil:
+    # The lanes' impulses back into their SoftContacts (restitution and the
+    # arbiters read them there).
+    cdef int i, j, k
+    cdef SoftLanes *ln
+    cdef SoftContact *sc
+    cdef SoftPoint *sp
+    for i in range(ctx.colorLanes[SOFT_GRAPH_COLORS]):
+        ln = &ctx.lanes[i]
+        for k in range(SOFT_LANES):
+            if ln.src[k] < 0:
+                continue
+            sc = &ctx.contacts[ln.src[k]]
+            for j in range(sc.count):
+                sp = &sc.p[j]
+                sp.normalImpulse = ln.normalImpulse[j][k]
+                sp.tangentImpulse = ln.tangentImpulse[j][k]
+                sp.maxNormalImpulse = ln.maxNormalImpulse[j][k]
+                sp.totalNormal = ln.totalNormal[j][k]
+                sp.totalTangent = ln.totalTangent[j][k]
 
 cdef void SoftApplyRestitution(SoftContext *ctx) noexcept nogil:
     # After the substeps: points that were approaching at the step's start
@@ -690,6 +903,8 @@ cdef void SoftApplyRestitution(SoftContext *ctx) noexcept nogil:
     cdef SoftPoint *sp
     cdef SoftBody *a
     cdef SoftBody *b
+    cdef SoftState *sa
+    cdef SoftState *sb
     cdef cpFloat nx, ny, e, vn, imp, newImp, px, py
     for i in range(ctx.contactCount):
         sc = &ctx.contacts[i]
@@ -698,14 +913,16 @@ cdef void SoftApplyRestitution(SoftContext *ctx) noexcept nogil:
             continue
         a = &ctx.bodies[sc.ia]
         b = &ctx.bodies[sc.ib]
+        sa = &ctx.states[sc.ia]
+        sb = &ctx.states[sc.ib]
         nx = sc.nx
         ny = sc.ny
         for j in range(sc.count):
             sp = &sc.p[j]
             if sp.relativeVelocity >= 0.0 or sp.maxNormalImpulse == 0.0:
                 continue
-            vn = ((b.vx - b.w * sp.rBy - a.vx + a.w * sp.rAy) * nx
-                  + (b.vy + b.w * sp.rBx - a.vy - a.w * sp.rAx) * ny)
+            vn = ((sb.vx - sb.w * sp.rBy - sa.vx + sa.w * sp.rAy) * nx
+                  + (sb.vy + sb.w * sp.rBx - sa.vy - sa.w * sp.rAx) * ny)
             imp = -sp.normalMass * (vn + e * sp.relativeVelocity)
             newImp = sp.normalImpulse + imp
             if newImp < 0.0:
@@ -715,12 +932,14 @@ cdef void SoftApplyRestitution(SoftContext *ctx) noexcept nogil:
             sp.totalNormal += imp
             px = imp * nx
             py = imp * ny
-            a.vx -= a.m_inv * px
-            a.vy -= a.m_inv * py
-            a.w -= a.i_inv * (sp.rAx * py - sp.rAy * px)
-            b.vx += b.m_inv * px
-            b.vy += b.m_inv * py
-            b.w += b.i_inv * (sp.rBx * py - sp.rBy * px)
+            if sc.ia != 0:
+                sa.vx -= a.m_inv * px
+                sa.vy -= a.m_inv * py
+                sa.w -= a.i_inv * (sp.rAx * py - sp.rAy * px)
+            if sc.ib != 0:
+                sb.vx += b.m_inv * px
+                sb.vy += b.m_inv * py
+                sb.w += b.i_inv * (sp.rBx * py - sp.rBy * px)
 
 cdef void SoftStoreImpulses(SoftContext *ctx) noexcept nogil:
     # jnAcc / jtAcc hold the impulse of the whole step, as in the chipmunk
@@ -742,6 +961,7 @@ cdef void SoftStoreImpulses(SoftContext *ctx) noexcept nogil:
 cdef void SoftIntegrateVelocities(SoftContext *ctx, bint last) noexcept nogil:
     cdef int i
     cdef SoftBody *sb
+    cdef SoftState *st
     cdef cpBody *body
     cdef cpFloat damping = ctx.damping
     cdef cpFloat h = ctx.h
@@ -749,25 +969,26 @@ cdef void SoftIntegrateVelocities(SoftContext *ctx, bint last) noexcept nogil:
     cdef cpFloat t
     for i in range(1, ctx.bodyCount):
         sb = &ctx.bodies[i]
+        st = &ctx.states[i]
         body = sb.body
         if sb.flags & SOFT_BODY_DEFAULT_VELOCITY:
             if sb.flags & SOFT_BODY_KINEMATIC:
                 continue
             # cpBodyUpdateVelocity's arithmetic; the force applies in every
             # substep and is cleared when the step ends.
-            sb.vx = sb.vx * damping + (ctx.gx + body.f.x * sb.m_inv) * h
-            sb.vy = sb.vy * damping + (ctx.gy + body.f.y * sb.m_inv) * h
-            sb.w = sb.w * damping + body.t * sb.i_inv * h
+            st.vx = st.vx * damping + (ctx.gx + body.f.x * sb.m_inv) * h
+            st.vy = st.vy * damping + (ctx.gy + body.f.y * sb.m_inv) * h
+            st.w = st.w * damping + body.t * sb.i_inv * h
         else:
-            body.v.x = sb.vx
-            body.v.y = sb.vy
-            body.w = sb.w
+            body.v.x = st.vx
+            body.v.y = st.vy
+            body.w = st.w
             f = body.f
             t = body.t
             body.velocity_func(body, cpv(ctx.gx, ctx.gy), damping, h)
-            sb.vx = body.v.x
-            sb.vy = body.v.y
-            sb.w = body.w
+            st.vx = body.v.x
+            st.vy = body.v.y
+            st.w = body.w
             if not last:
                 # Body.update_velocity clears the force: keep it for the
                 # remaining substeps.
@@ -777,23 +998,25 @@ cdef void SoftIntegrateVelocities(SoftContext *ctx, bint last) noexcept nogil:
 cdef void SoftIntegratePositions(SoftContext *ctx) noexcept nogil:
     cdef int i
     cdef SoftBody *sb
+    cdef SoftState *st
     cdef cpBody *body
     cdef cpFloat h = ctx.h
     cdef cpFloat dx, dy, da, qc, qs, mag, px0, py0, a0
     for i in range(1, ctx.bodyCount):
         sb = &ctx.bodies[i]
+        st = &ctx.states[i]
         body = sb.body
         if sb.flags & SOFT_BODY_DEFAULT_POSITION:
-            dx = sb.vx * h
-            dy = sb.vy * h
-            da = sb.w * h
+            dx = st.vx * h
+            dy = st.vy * h
+            da = st.w * h
             body.p.x = body.p.x + dx
             body.p.y = body.p.y + dy
             body.a = body.a + da
         else:
-            body.v.x = sb.vx
-            body.v.y = sb.vy
-            body.w = sb.w
+            body.v.x = st.vx
+            body.v.y = st.vy
+            body.w = st.w
             px0 = body.p.x
             py0 = body.p.y
             a0 = body.a
@@ -801,19 +1024,19 @@ cdef void SoftIntegratePositions(SoftContext *ctx) noexcept nogil:
             dx = body.p.x - px0
             dy = body.p.y - py0
             da = body.a - a0
-            sb.vx = body.v.x
-            sb.vy = body.v.y
-            sb.w = body.w
-        sb.dpx += dx
-        sb.dpy += dy
+            st.vx = body.v.x
+            st.vy = body.v.y
+            st.w = body.w
+        st.dpx += dx
+        st.dpy += dy
         # The step's rotation, advanced by da and renormalised (no trig).
-        qc = sb.qc - da * sb.qs
-        qs = sb.qs + da * sb.qc
+        qc = st.qc - da * st.qs
+        qs = st.qs + da * st.qc
         mag = sqrt(qc * qc + qs * qs)
         if mag > 0.0:
             mag = 1.0 / mag
-        sb.qc = qc * mag
-        sb.qs = qs * mag
+        st.qc = qc * mag
+        st.qs = qs * mag
         if sb.flags & SOFT_BODY_JOINTED:
             # The joints' preStep reads the transform.
             SoftSetTransform(body)
@@ -821,13 +1044,15 @@ cdef void SoftIntegratePositions(SoftContext *ctx) noexcept nogil:
 cdef void SoftFinishBodies(SoftContext *ctx) noexcept nogil:
     cdef int i
     cdef SoftBody *sb
+    cdef SoftState *st
     cdef cpBody *body
     for i in range(1, ctx.bodyCount):
         sb = &ctx.bodies[i]
+        st = &ctx.states[i]
         body = sb.body
-        body.v.x = sb.vx
-        body.v.y = sb.vy
-        body.w = sb.w
+        body.v.x = st.vx
+        body.v.y = st.vy
+        body.w = st.w
         body.v_bias = cpv(0.0, 0.0)
         body.w_bias = 0.0
         if (sb.flags & SOFT_BODY_DEFAULT_VELOCITY) and not (sb.flags & SOFT_BODY_KINEMATIC):
@@ -870,6 +1095,8 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     ctx.staticSoft = SoftMakeSoft(staticHertz, space.soft.contactDampingRatio, ctx.h)
     ctx.contactCount = 0
     ctx.jointBodyCount = 0
+    ctx.overflowCount = 0
+    ctx.colorLanes[SOFT_GRAPH_COLORS] = 0
     space.collideMargin = SoftSpeculative(space)
 
     StageResetArbiters(space)
@@ -885,7 +1112,7 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     cpSpaceLock(space)
     StageFilterArbiterCache(space)
     ready = (SoftGatherBodies(&ctx) and SoftPrepareJoints(&ctx, prev_dt)
-             and SoftPrepareContacts(&ctx, prev_dt))
+             and SoftPrepareContacts(&ctx, prev_dt) and SoftColorContacts(&ctx))
     if ready:
         for k in range(ctx.substeps):
             SoftIntegrateVelocities(&ctx, k == ctx.substeps - 1)
@@ -898,9 +1125,25 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
                 SoftJointsSolve(&ctx)
                 SoftRelax(&ctx)
             SoftAccumulate(&ctx)
+        SoftUnpackLanes(&ctx)
         SoftApplyRestitution(&ctx)
         SoftStoreImpulses(&ctx)
         SoftFinishBodies(&ctx)
         SoftFinishJoints(&ctx)
     StagePostSolve(space)
     cpSpaceUnlock(space, 1)
+
+
+# -- test switches -------------------------------------------------------------------------
+
+def _lanes_use_scalar(on=None):
+    """Whether the contact kernels run their scalar path (and, given `on`,
+    set it first). The scalar path is what a compiler without vector
+    extensions builds; tests check that both paths give the same bits."""
+    if on is not None:
+        SoftLanesSetScalar(1 if on else 0)
+    return bool(SoftLanesScalar())
+
+def _lanes_have_simd():
+    """Whether this build has the vector path of the contact kernels."""
+    return bool(SoftLanesHaveSimd())

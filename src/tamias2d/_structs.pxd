@@ -351,12 +351,8 @@ cdef struct cpSoftSettings:
 # Per-step scratch of the soft solver, owned by the space (grown, never
 # shrunk; freed by cpSpaceDestroy; never copied).
 cdef struct cpSoftScratch:
-    void *bodies
-    int bodyCap
-    void *contacts
-    int contactCap
-    void *jointBodies
-    int jointBodyCap
+    void *buf[8]                 # indexed by _soft_step's SOFT_SCRATCH_*
+    int cap[8]                   # elements each buffer has room for
 
 cdef struct cpContactBufferHeader:
     cpTimestamp stamp

@@ -233,9 +233,10 @@ cdef void cpArbiterUpdate(cpArbiter *arb, cpCollisionInfo *info, cpSpace *space)
         con.r2 = cpvsub(con.r2, b.body.p)
         con.jnAcc = 0.0
         con.jtAcc = 0.0
-        # The chipmunk solver zeroes jBias in its pre-step; the soft solver
-        # keeps a point's load in it from step to step.
+        # The chipmunk solver sets bias and zeroes jBias in its pre-step; the
+        # soft solver keeps a point's age and load in them from step to step.
         con.jBias = 0.0
+        con.bias = 0.0
         # Warm start: take the impulses of an old contact with the same
         # feature hash; the last match wins.
         for j in range(arb.count):
@@ -244,6 +245,7 @@ cdef void cpArbiterUpdate(cpArbiter *arb, cpCollisionInfo *info, cpSpace *space)
                 con.jnAcc = old.jnAcc
                 con.jtAcc = old.jtAcc
                 con.jBias = old.jBias
+                con.bias = old.bias
 
     arb.contacts = info.arr
     arb.count = info.count

@@ -15,7 +15,7 @@ integrator, no post-step callback) runs entirely without the GIL.
 """
 cimport cython
 from libc.math cimport INFINITY, pow, atan2, isfinite
-from libc.string cimport memcpy
+from libc.string cimport memcpy, memset
 from libc.stdint cimport uintptr_t
 from cpython.ref cimport PyObject
 
@@ -159,12 +159,7 @@ cdef cpSpace *cpSpaceInit(cpSpace *space) noexcept nogil:
     space.userData = NULL
     # Not in Munk2D: the second solver's settings (off: solver "chipmunk").
     SoftSettingsInit(&space.soft)
-    space.softScratch.bodies = NULL
-    space.softScratch.contacts = NULL
-    space.softScratch.jointBodies = NULL
-    space.softScratch.bodyCap = 0
-    space.softScratch.contactCap = 0
-    space.softScratch.jointBodyCap = 0
+    memset(&space.softScratch, 0, sizeof(space.softScratch))
     space.collideMargin = 0.0
 
     space.shapeIDCounter = 0

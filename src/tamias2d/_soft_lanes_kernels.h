@@ -1,0 +1,139 @@
+/* The contact kernels of the soft solver over SoftLanes, written once over
+ * the lane type V (mask type M). Included twice by _soft_lanes.h, which
+ * defines V, M, SOFT_KERNEL, LOOP_LANES, the soft_v_* accessors and the V_*
+ * comparisons and selects; no include guard on purpose.
+ *
+ * Same arithmetic as SoftSolve in _soft_step.pyx (the scalar solver of the
+ * contacts that are not packed into lanes); see there for the why. */
+
+#define L(field) soft_v_load((field), k)
+#define S(field, value) soft_v_store((field), k, (value))
+#define G(idx, member) soft_v_gather(st, (idx), k, offsetof(SoftState, member))
+#define P(idx, w, member, value) soft_v_scatter(st, (idx), (w), k, offsetof(SoftState, member), (value))
+
+static inline void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftState *st) {
+    int k, j;
+    LOOP_LANES(k) {
+        V mA = L(c->mA), iA = L(c->iA), mB = L(c->mB), iB = L(c->iB);
+        V nx = L(c->nx), ny = L(c->ny);
+        V vax = G(c->ia, vx), vay = G(c->ia, vy), wa = G(c->ia, w);
+        V vbx = G(c->ib, vx), vby = G(c->ib, vy), wb = G(c->ib, w);
+        for (j = 0; j < 2; j++) {
+            /* P = normalImpulse n + tangentImpulse perp(n) */
+            V xn = L(c->normalImpulse[j]), xt = L(c->tangentImpulse[j]);
+            V px = xn * nx - xt * ny;
+            V py = xn * ny + xt * nx;
+            vax = vax - mA * px;
+            vay = vay - mA * py;
+            wa = wa - iA * (xn * L(c->rnA[j]) + xt * L(c->rtA[j]));
+            vbx = vbx + mB * px;
+            vby = vby + mB * py;
+            wb = wb + iB * (xn * L(c->rnB[j]) + xt * L(c->rtB[j]));
+        }
+        P(c->ia, c->wa, vx, vax); P(c->ia, c->wa, vy, vay); P(c->ia, c->wa, w, wa);
+        P(c->ib, c->wb, vx, vbx); P(c->ib, c->wb, vy, vby); P(c->ib, c->wb, w, wb);
+    }
+}
+
+static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double inv_h_s,
+                                           double pushOut_s, int useBias) {
+    int k, j;
+    V zero = soft_v_splat(0.0), one = soft_v_splat(1.0);
+    V inv_h = soft_v_splat(inv_h_s), negPush = soft_v_splat(-pushOut_s);
+    LOOP_LANES(k) {
+        V mA = L(c->mA), iA = L(c->iA), mB = L(c->mB), iB = L(c->iB);
+        V nx = L(c->nx), ny = L(c->ny);
+        V vax = G(c->ia, vx), vay = G(c->ia, vy), wa = G(c->ia, w);
+        V vbx = G(c->ib, vx), vby = G(c->ib, vy), wb = G(c->ib, w);
+        V qcA = G(c->ia, qc), qsA = G(c->ia, qs), qcB = G(c->ib, qc), qsB = G(c->ib, qs);
+        V ddx = G(c->ib, dpx) - G(c->ia, dpx), ddy = G(c->ib, dpy) - G(c->ia, dpy);
+        V bias[2], gamma[2];
+        V lin, x01, x02, k11, k12, k22, a11, a22, q1, q2, det, x1, x2, y1, z2, n1, n2, d1, d2, imp;
+        M ok1, ok2, ok3, ok4;
+        for (j = 0; j < 2; j++) {
+            /* The current separation from the bodies' motion in this step. */
+            V rAx = L(c->rAx[j]), rAy = L(c->rAy[j]), rBx = L(c->rBx[j]), rBy = L(c->rBy[j]);
+            V prAx = qcA * rAx - qsA * rAy, prAy = qsA * rAx + qcA * rAy;
+            V prBx = qcB * rBx - qsB * rBy, prBy = qsB * rBx + qcB * rBy;
+            V s = (ddx + (prBx - prAx)) * nx + (ddy + (prBy - prAy)) * ny + L(c->base[j]);
+            M spec = V_GT(s, zero);
+            if (useBias) {
+                V b = L(c->biasRate[j]) * s;
+                b = V_SEL(V_LT(b, negPush), negPush, b);
+                bias[j] = V_SEL(spec, s * inv_h, b);
+                gamma[j] = V_SEL(spec, zero, L(c->compliance[j]));
+            } else {
+                bias[j] = V_SEL(spec, s * inv_h, zero);
+                gamma[j] = zero;
+            }
+        }
+        /* Both normal rows at once (the 2x2 LCP, Box2D 2.x's cases). */
+        lin = (vbx - vax) * nx + (vby - vay) * ny;
+        x01 = L(c->normalImpulse[0]);
+        x02 = L(c->normalImpulse[1]);
+        k11 = L(c->k11); k12 = L(c->k12); k22 = L(c->k22);
+        a11 = k11 * (one + gamma[0]);
+        a22 = k22 * (one + gamma[1]);
+        q1 = lin + wb * L(c->rnB[0]) - wa * L(c->rnA[0]) + bias[0] - (k11 * x01 + k12 * x02);
+        q2 = lin + wb * L(c->rnB[1]) - wa * L(c->rnA[1]) + bias[1] - (k12 * x01 + k22 * x02);
+        det = a11 * a22 - k12 * k12;
+        x1 = (k12 * q2 - a22 * q1) / det;
+        x2 = (k12 * q1 - a11 * q2) / det;
+        ok1 = V_AND(V_GE(x1, zero), V_GE(x2, zero));
+        y1 = -(q1 / a11);                                   /* only the first pushes */
+        ok2 = V_AND(V_GE(y1, zero), V_GE(k12 * y1 + q2, zero));
+        z2 = -(q2 / a22);                                   /* only the second */
+        ok3 = V_AND(V_GE(z2, zero), V_GE(k12 * z2 + q1, zero));
+        ok4 = V_AND(V_GE(q1, zero), V_GE(q2, zero));        /* neither */
+        /* The first case that holds; with none (round-off) the impulses stay. */
+        ok2 = V_ANDNOT(ok1, ok2);
+        ok3 = V_ANDNOT(V_OR(ok1, ok2), ok3);
+        ok4 = V_NOT(V_OR(V_OR(ok1, ok2), V_OR(ok3, ok4)));
+        n1 = V_PICK3(ok1, x1, ok2, y1, ok4, x01);
+        n2 = V_PICK3(ok1, x2, ok3, z2, ok4, x02);
+        d1 = n1 - x01;
+        d2 = n2 - x02;
+        S(c->normalImpulse[0], n1);
+        S(c->normalImpulse[1], n2);
+        {
+            V m1 = L(c->maxNormalImpulse[0]), m2 = L(c->maxNormalImpulse[1]);
+            S(c->maxNormalImpulse[0], V_SEL(V_GT(n1, m1), n1, m1));
+            S(c->maxNormalImpulse[1], V_SEL(V_GT(n2, m2), n2, m2));
+        }
+        imp = d1 + d2;
+        vax = vax - mA * (imp * nx);
+        vay = vay - mA * (imp * ny);
+        wa = wa - iA * (L(c->rnA[0]) * d1 + L(c->rnA[1]) * d2);
+        vbx = vbx + mB * (imp * nx);
+        vby = vby + mB * (imp * ny);
+        wb = wb + iB * (L(c->rnB[0]) * d1 + L(c->rnB[1]) * d2);
+        if (!useBias) {
+            /* Friction in the relax pass only; tangent t = perp(n). */
+            V mu = L(c->friction), surfaceT = L(c->surfaceT);
+            for (j = 0; j < 2; j++) {
+                V rtA = L(c->rtA[j]), rtB = L(c->rtB[j]);
+                V vt = ((vby - vay) * nx - (vbx - vax) * ny) + wb * rtB - wa * rtA + surfaceT;
+                V old = L(c->tangentImpulse[j]);
+                V maxF = mu * L(c->normalImpulse[j]);
+                V negMaxF = -maxF;
+                V tImp = old - L(c->tangentMass[j]) * vt;
+                tImp = V_SEL(V_LT(tImp, negMaxF), negMaxF, V_SEL(V_GT(tImp, maxF), maxF, tImp));
+                S(c->tangentImpulse[j], tImp);
+                imp = tImp - old;
+                vax = vax + mA * (imp * ny);
+                vay = vay - mA * (imp * nx);
+                wa = wa - iA * (imp * rtA);
+                vbx = vbx - mB * (imp * ny);
+                vby = vby + mB * (imp * nx);
+                wb = wb + iB * (imp * rtB);
+            }
+        }
+        P(c->ia, c->wa, vx, vax); P(c->ia, c->wa, vy, vay); P(c->ia, c->wa, w, wa);
+        P(c->ib, c->wb, vx, vbx); P(c->ib, c->wb, vy, vby); P(c->ib, c->wb, w, wb);
+    }
+}
+
+#undef L
+#undef S
+#undef G
+#undef P
