@@ -14,7 +14,7 @@ LAYERS = [
     ["_config"],
     ["vector"],
     ["_structs"],
-    ["_containers", "_threadguard", "_pickle"],
+    ["_containers", "_threadguard", "_threads", "_pickle"],
     ["_private"],
     ["_spatialindex"],
     ["_bbtree", "_spacehash"],

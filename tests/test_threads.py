@@ -355,3 +355,84 @@ def test_two_threads_stepping_one_space_take_turns():
     for _ in range(40):
         b.step(1 / 60)
     assert snapshot(a) == snapshot(b)
+
+
+# -- one soft step on several threads (Space(threaded=True), threads = 2) --------------------
+
+def _soft(build, threads):
+    space = build()
+    space.solver = "soft"
+    space.threaded = True
+    space.threads = threads
+    return space
+
+
+def _big_pyramid():
+    # Enough bodies and contacts per colour that the stages are shared out.
+    return scenes.pyramid(tamias2d, rows=36)
+
+
+def _run(space, steps):
+    hook = getattr(space, "scene_hook", None)
+    for i in range(steps):
+        if hook is not None:
+            hook(i)
+        space.step(1 / 60)
+    return snapshot(space)
+
+
+@pytest.mark.parametrize("build", [_big_pyramid, lambda: scenes.rain(tamias2d, count=900)],
+                         ids=["pyramid", "rain"])
+def test_soft_step_on_two_threads_gives_the_one_thread_bits(build):
+    from tamias2d import _soft_step
+    one = _run(_soft(build, 1), 90)
+    stages = _soft_step._pool_state()[1]
+    two = _run(_soft(build, 2), 90)
+    assert _soft_step._pool_state()[0] == 1            # the worker runs
+    assert _soft_step._pool_state()[1] > stages         # and stages were shared out
+    assert one == two
+
+
+def test_threaded_soft_step_with_python_integrators_and_joints():
+    # A Python velocity_func runs its stage on the calling thread only; the
+    # joints are solved there too. Same bits as one thread.
+    def build():
+        space = _big_pyramid()
+        bodies = list(space.bodies)
+
+        def drag(body, gravity, damping, dt):
+            tamias2d.Body.update_velocity(body, gravity, 0.999 * damping, dt)
+
+        bodies[7].velocity_func = drag
+        space.add(tamias2d.PinJoint(bodies[-1], bodies[-2]))
+        return space
+    assert _run(_soft(build, 1), 60) == _run(_soft(build, 2), 60)
+
+
+def test_two_threaded_soft_spaces_stepped_at_once():
+    # The worker serves one step at a time; the other space's step runs on
+    # its own thread. Both end where stepping them alone ends.
+    spaces = [_soft(_big_pyramid, 2) for _ in range(2)]
+    alone = [_soft(_big_pyramid, 1) for _ in range(2)]
+    run_in_threads(spaces, 1 / 60, 20)
+    run_serially(alone, 1 / 60, 20)
+    assert [snapshot(s) for s in spaces] == [snapshot(s) for s in alone]
+
+
+def test_threads_survive_copy_and_pickle_and_the_copy_continues_alike():
+    import copy
+    import pickle
+    space = _soft(_big_pyramid, 2)
+    _run(space, 30)
+    for twin in (space.copy(), copy.deepcopy(space), pickle.loads(pickle.dumps(space))):
+        assert twin.threaded and twin.threads == 2
+        twin.threads = 1
+        assert _run(twin, 30) == _run(space.copy(), 30)
+
+
+def test_threads_of_a_space_that_is_not_threaded_stay_one():
+    space = _soft(_big_pyramid, 2)
+    assert space.threads == 2
+    plain = tamias2d.Space(solver="soft")
+    plain.threads = 2
+    assert plain.threads == 1

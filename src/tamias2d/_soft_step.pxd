@@ -167,3 +167,5 @@ cdef cpFloat SoftPushOut(const cpSpace *space) noexcept nogil
 cdef cpFloat SoftSpeculative(const cpSpace *space) noexcept nogil
 
 cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil
+# Start the worker thread of threaded soft steps if it is not running (GIL).
+cdef int SoftPoolEnsure() except -1

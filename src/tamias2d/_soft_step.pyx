@@ -37,6 +37,13 @@ from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, 
     cpSoftSettings, cpSoftScratch, TAMIAS_SOLVER_CHIPMUNK, TAMIAS_SOLVER_SOFT,
     CP_BODY_TYPE_KINEMATIC, CP_ARBITER_STATE_FIRST_COLLISION)
 from tamias2d._containers cimport cprealloc, cpfree
+from tamias2d._threads cimport (tamias_take_next, tamias_load, tamias_store, tamias_add,
+    tamias_exchange, tamias_cpu_relax, tamias_yield)
+from cpython.pythread cimport (PyThread_type_lock, PyThread_allocate_lock,
+    PyThread_acquire_lock, PyThread_release_lock, WAIT_LOCK)
+
+cdef extern from "pythread.h" nogil:
+    unsigned long PyThread_start_new_thread(void (*func)(void *) noexcept nogil, void *arg)
 from tamias2d.vector cimport cpVect, cpv, cpTransformNewTranspose
 from tamias2d.body cimport cpBodyGetType, cpBodyUpdateVelocity, cpBodyUpdatePosition
 from tamias2d.constraints cimport tamias_constraint_scale_impulse
@@ -49,6 +56,7 @@ from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, StageResetArbiter
 cdef void SoftSettingsInit(cpSoftSettings *settings) noexcept nogil:
     settings.solver = TAMIAS_SOLVER_CHIPMUNK
     settings.substeps = SOFT_DEFAULT_SUBSTEPS
+    settings.threads = 1
     settings.contactHertz = SOFT_DEFAULT_CONTACT_HERTZ
     settings.contactDampingRatio = SOFT_DEFAULT_CONTACT_DAMPING_RATIO
     settings.pushOut = -1.0
@@ -137,6 +145,9 @@ cdef struct SoftContext:
     int colorLanes[SOFT_GRAPH_COLORS + 1]   # colour c: lanes[colorLanes[c]:colorLanes[c+1]]
     int *overflow             # SoftContact indices solved one by one
     int overflowCount
+    bint threaded             # stages may run on the pool (SoftRun)
+    bint serialVelocities     # a body has its own velocity_func (Python: one thread)
+    bint serialPositions      # a body has its own position_func
     int *jointBodies          # slots touched by joints
     int jointBodyCount
     int substeps
@@ -205,8 +216,12 @@ cdef bint SoftGatherBodies(SoftContext *ctx) noexcept nogil:
         sb.contacts = 0
         if body.velocity_func == cpBodyUpdateVelocity:
             sb.flags |= SOFT_BODY_DEFAULT_VELOCITY
+        else:
+            ctx.serialVelocities = 1
         if body.position_func == cpBodyUpdatePosition:
             sb.flags |= SOFT_BODY_DEFAULT_POSITION
+        else:
+            ctx.serialPositions = 1
         if cpBodyGetType(body) == CP_BODY_TYPE_KINEMATIC:
             sb.flags |= SOFT_BODY_KINEMATIC
     return 1
@@ -652,8 +667,8 @@ cdef void SoftWarmStart(SoftContext *ctx) noexcept nogil:
     cdef SoftState *sa
     cdef SoftState *sb
     cdef cpFloat px, py, nx, ny
-    for i in range(ctx.colorLanes[SOFT_GRAPH_COLORS]):
-        SoftLanesWarmStart(&ctx.lanes[i], ctx.states)
+    for i in range(SOFT_GRAPH_COLORS):
+        SoftRun(ctx, SOFT_TASK_WARM_START, ctx.colorLanes[i], ctx.colorLanes[i + 1], 0)
     for i in range(ctx.overflowCount):
         sc = &ctx.contacts[ctx.overflow[i]]
         a = &ctx.bodies[sc.ia]
@@ -682,8 +697,8 @@ cdef void SoftSolve(SoftContext *ctx, bint useBias) noexcept nogil:
     # friction. The coloured contacts lane by lane (_soft_lanes_kernels.h,
     # the same arithmetic as below), then the overflow one by one.
     cdef int i
-    for i in range(ctx.colorLanes[SOFT_GRAPH_COLORS]):
-        SoftLanesSolve(&ctx.lanes[i], ctx.states, ctx.inv_h, ctx.pushOut, useBias)
+    for i in range(SOFT_GRAPH_COLORS):
+        SoftRun(ctx, SOFT_TASK_SOLVE, ctx.colorLanes[i], ctx.colorLanes[i + 1], useBias)
     for i in range(ctx.overflowCount):
         SoftSolveContact(ctx, &ctx.contacts[ctx.overflow[i]], useBias)
 
@@ -860,18 +875,22 @@ cdef void SoftAccumulate(SoftContext *ctx) noexcept nogil:
     # relax pass (the warm start re-applies the previous one).
     cdef int i, j, k
     cdef SoftContact *sc
-    cdef SoftLanes *ln
-    for i in range(ctx.colorLanes[SOFT_GRAPH_COLORS]):
-        ln = &ctx.lanes[i]
-        for j in range(2):
-            for k in range(SOFT_LANES):
-                ln.totalNormal[j][k] += ln.normalImpulse[j][k]
-                ln.totalTangent[j][k] += ln.tangentImpulse[j][k]
+    SoftRun(ctx, SOFT_TASK_ACCUMULATE, 0, ctx.colorLanes[SOFT_GRAPH_COLORS], 0)
     for i in range(ctx.overflowCount):
         sc = &ctx.contacts[ctx.overflow[i]]
         for j in range(sc.count):
             sc.p[j].totalNormal += sc.p[j].normalImpulse
             sc.p[j].totalTangent += sc.p[j].tangentImpulse
+
+cdef void SoftAccumulateLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
+    cdef int i, j, k
+    cdef SoftLanes *ln
+    for i in range(begin, end):
+        ln = &ctx.lanes[i]
+        for j in range(2):
+            for k in range(SOFT_LANES):
+                ln.totalNormal[j][k] += ln.normalImpulse[j][k]
+                ln.totalTangent[j][k] += ln.tangentImpulse[j][k]
 
 cdef void SoftUnpackLanes(SoftContext *ctx) noexcept nogil:
     # The lanes' impulses back into their SoftContacts (restitution and the
@@ -958,7 +977,8 @@ cdef void SoftStoreImpulses(SoftContext *ctx) noexcept nogil:
 
 # -- integration ---------------------------------------------------------------------------
 
-cdef void SoftIntegrateVelocities(SoftContext *ctx, bint last) noexcept nogil:
+cdef void SoftIntegrateVelocities(SoftContext *ctx, int begin, int end, bint last) noexcept nogil:
+    # Bodies [begin, end) (slot 0 excluded by the callers).
     cdef int i
     cdef SoftBody *sb
     cdef SoftState *st
@@ -967,7 +987,7 @@ cdef void SoftIntegrateVelocities(SoftContext *ctx, bint last) noexcept nogil:
     cdef cpFloat h = ctx.h
     cdef cpVect f
     cdef cpFloat t
-    for i in range(1, ctx.bodyCount):
+    for i in range(begin, end):
         sb = &ctx.bodies[i]
         st = &ctx.states[i]
         body = sb.body
@@ -995,14 +1015,14 @@ cdef void SoftIntegrateVelocities(SoftContext *ctx, bint last) noexcept nogil:
                 body.f = f
                 body.t = t
 
-cdef void SoftIntegratePositions(SoftContext *ctx) noexcept nogil:
+cdef void SoftIntegratePositions(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef int i
     cdef SoftBody *sb
     cdef SoftState *st
     cdef cpBody *body
     cdef cpFloat h = ctx.h
     cdef cpFloat dx, dy, da, qc, qs, mag, px0, py0, a0
-    for i in range(1, ctx.bodyCount):
+    for i in range(begin, end):
         sb = &ctx.bodies[i]
         st = &ctx.states[i]
         body = sb.body
@@ -1061,6 +1081,163 @@ cdef void SoftFinishBodies(SoftContext *ctx) noexcept nogil:
         SoftSetTransform(body)
 
 
+# -- threads within one step ---------------------------------------------------------
+# A threaded space (Space(threaded=True), threads = 2) runs the body and
+# contact stages of its soft step on the calling thread and a worker. A
+# stage is a range cut into chunks that the threads take from a shared
+# counter; the chunks of a stage are independent (contacts of one colour
+# share no movable body, and each body integrates alone), so the result is
+# the same bits whoever runs which chunk, and the same as on one thread. The
+# caller never waits for a worker that has not come (a busy machine): it
+# takes every chunk the worker does not.
+
+cdef enum:
+    SOFT_TASK_INTEGRATE_VELOCITIES = 0
+    SOFT_TASK_INTEGRATE_POSITIONS
+    SOFT_TASK_WARM_START
+    SOFT_TASK_SOLVE
+    SOFT_TASK_ACCUMULATE
+
+cdef enum:
+    SOFT_CHUNK_LANES = 32         # lanes of contacts per chunk
+    SOFT_CHUNK_BODIES = 128
+    SOFT_WORKER_SPIN = 1 << 16    # pauses a worker polls for the next stage before it sleeps
+
+cdef struct SoftPool:
+    volatile long generation      # +1 per stage handed out
+    volatile long open            # 1 while the stage's chunks may be taken
+    volatile long inside          # workers between their look at `open` and leaving
+    volatile long next            # the next chunk (atomic)
+    volatile long sleeping        # the worker sleeps on `wake`
+    volatile long busy            # a step is using the pool
+    SoftContext *ctx              # the stage: task, range, flag
+    int task, begin, end, chunk, chunks
+    bint flag
+    PyThread_type_lock wake
+    int workers                   # started (0 or 1)
+
+cdef SoftPool _pool
+cdef long _pool_pid = -1
+
+
+cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag) noexcept nogil:
+    cdef int i
+    if task == SOFT_TASK_INTEGRATE_VELOCITIES:
+        SoftIntegrateVelocities(ctx, begin, end, flag)
+    elif task == SOFT_TASK_INTEGRATE_POSITIONS:
+        SoftIntegratePositions(ctx, begin, end)
+    elif task == SOFT_TASK_WARM_START:
+        for i in range(begin, end):
+            SoftLanesWarmStart(&ctx.lanes[i], ctx.states)
+    elif task == SOFT_TASK_SOLVE:
+        for i in range(begin, end):
+            SoftLanesSolve(&ctx.lanes[i], ctx.states, ctx.inv_h, ctx.pushOut, flag)
+    elif task == SOFT_TASK_ACCUMULATE:
+        SoftAccumulateLanes(ctx, begin, end)
+
+cdef void SoftTakeChunks() noexcept nogil:
+    cdef long i
+    cdef int lo, hi
+    while True:
+        i = tamias_take_next(&_pool.next)
+        if i >= _pool.chunks:
+            return
+        lo = _pool.begin + <int>i * _pool.chunk
+        hi = lo + _pool.chunk
+        if hi > _pool.end:
+            hi = _pool.end
+        SoftRunRange(_pool.ctx, _pool.task, lo, hi, _pool.flag)
+
+cdef void SoftRun(SoftContext *ctx, int task, int begin, int end, bint flag) noexcept nogil:
+    # One stage over [begin, end): on the pool when the space is threaded
+    # and the stage is big enough to share, else here.
+    cdef int chunk = SOFT_CHUNK_BODIES if task <= SOFT_TASK_INTEGRATE_POSITIONS else SOFT_CHUNK_LANES
+    cdef int k
+    if end <= begin:
+        return
+    if task == SOFT_TASK_INTEGRATE_VELOCITIES and ctx.serialVelocities:
+        SoftRunRange(ctx, task, begin, end, flag)
+        return
+    if task == SOFT_TASK_INTEGRATE_POSITIONS and ctx.serialPositions:
+        SoftRunRange(ctx, task, begin, end, flag)
+        return
+    if not ctx.threaded or end - begin <= chunk:
+        SoftRunRange(ctx, task, begin, end, flag)
+        return
+    _pool.ctx = ctx
+    _pool.task = task
+    _pool.begin = begin
+    _pool.end = end
+    _pool.chunk = chunk
+    _pool.chunks = (end - begin + chunk - 1) // chunk
+    _pool.flag = flag
+    tamias_store(&_pool.next, 0)
+    tamias_store(&_pool.open, 1)
+    tamias_add(&_pool.generation, 1)
+    if tamias_exchange(&_pool.sleeping, 0) == 1:
+        PyThread_release_lock(_pool.wake)
+    SoftTakeChunks()
+    tamias_store(&_pool.open, 0)
+    k = 0
+    while tamias_load(&_pool.inside) != 0:
+        # The worker is finishing a chunk (or was preempted inside one).
+        k += 1
+        if k < 4096:
+            tamias_cpu_relax()
+        else:
+            tamias_yield()
+
+cdef void SoftWorkerMain(void *arg) noexcept nogil:
+    cdef long seen = tamias_load(&_pool.generation)
+    cdef long spins
+    while True:
+        spins = 0
+        while tamias_load(&_pool.generation) == seen:
+            if spins < SOFT_WORKER_SPIN:
+                spins += 1
+                tamias_cpu_relax()
+                continue
+            # Sleep until the next stage; the caller wakes a sleeper once.
+            tamias_store(&_pool.sleeping, 1)
+            if tamias_load(&_pool.generation) != seen and tamias_exchange(&_pool.sleeping, 0) == 1:
+                break
+            PyThread_acquire_lock(_pool.wake, WAIT_LOCK)
+            spins = 0
+        seen = tamias_load(&_pool.generation)
+        tamias_add(&_pool.inside, 1)
+        if tamias_load(&_pool.open):
+            SoftTakeChunks()
+        tamias_add(&_pool.inside, -1)
+
+cdef bint SoftPoolAcquire(cpSpace *space) noexcept nogil:
+    # The pool serves one step at a time; another space stepped meanwhile
+    # (from another thread) runs on its own thread, with the same result.
+    if space.soft.threads <= 1 or _pool.workers == 0:
+        return 0
+    return tamias_exchange(&_pool.busy, 1) == 0
+
+cdef inline void SoftPoolRelease() noexcept nogil:
+    tamias_store(&_pool.busy, 0)
+
+cdef int SoftPoolEnsure() except -1:
+    # Start the worker (with the GIL; once per process, again after a fork).
+    global _pool_pid
+    import os
+    pid = os.getpid()
+    if _pool_pid == pid and _pool.workers > 0:
+        return 0
+    memset(&_pool, 0, sizeof(SoftPool))
+    _pool.wake = PyThread_allocate_lock()
+    if _pool.wake == NULL:
+        raise MemoryError("cannot allocate the lock of the soft solver's worker")
+    PyThread_acquire_lock(_pool.wake, WAIT_LOCK)
+    if PyThread_start_new_thread(SoftWorkerMain, NULL) == <unsigned long>-1:
+        raise RuntimeError("cannot start the soft solver's worker thread")
+    _pool.workers = 1
+    _pool_pid = pid
+    return 0
+
+
 # -- the step -----------------------------------------------------------------------------
 
 cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
@@ -1097,6 +1274,9 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     ctx.jointBodyCount = 0
     ctx.overflowCount = 0
     ctx.colorLanes[SOFT_GRAPH_COLORS] = 0
+    ctx.serialVelocities = 0
+    ctx.serialPositions = 0
+    ctx.threaded = 0
     space.collideMargin = SoftSpeculative(space)
 
     StageResetArbiters(space)
@@ -1114,17 +1294,21 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     ready = (SoftGatherBodies(&ctx) and SoftPrepareJoints(&ctx, prev_dt)
              and SoftPrepareContacts(&ctx, prev_dt) and SoftColorContacts(&ctx))
     if ready:
+        ctx.threaded = SoftPoolAcquire(space)
         for k in range(ctx.substeps):
-            SoftIntegrateVelocities(&ctx, k == ctx.substeps - 1)
+            SoftRun(&ctx, SOFT_TASK_INTEGRATE_VELOCITIES, 1, ctx.bodyCount, k == ctx.substeps - 1)
             SoftJointsWarmStart(&ctx)
             SoftWarmStart(&ctx)
             SoftJointsSolve(&ctx)
             SoftSolve(&ctx, 1)
-            SoftIntegratePositions(&ctx)
+            SoftRun(&ctx, SOFT_TASK_INTEGRATE_POSITIONS, 1, ctx.bodyCount, 0)
             for r in range(SOFT_RELAX_ITERATIONS):
                 SoftJointsSolve(&ctx)
                 SoftRelax(&ctx)
             SoftAccumulate(&ctx)
+        if ctx.threaded:
+            SoftPoolRelease()
+            ctx.threaded = 0
         SoftUnpackLanes(&ctx)
         SoftApplyRestitution(&ctx)
         SoftStoreImpulses(&ctx)
@@ -1147,3 +1331,7 @@ def _lanes_use_scalar(on=None):
 def _lanes_have_simd():
     """Whether this build has the vector path of the contact kernels."""
     return bool(SoftLanesHaveSimd())
+
+def _pool_state():
+    """The soft solver's thread pool: (workers started, stages handed out)."""
+    return _pool.workers, _pool.generation

@@ -38,71 +38,12 @@ from tamias2d._containers cimport cpTakeOutOfMemory, cpSetOutOfMemory
 from tamias2d.collision cimport (CollisionDiagnostics, cpCollisionTakeDiagnostics,
     cpCollisionPutDiagnostics)
 from tamias2d.space cimport Space, tamias_space_step
+from tamias2d._threads cimport (tamias_take_next, tamias_load, tamias_store, tamias_add,
+    tamias_now_ns, tamias_cpu_relax, tamias_thread_ident)
 
 import threading
 
 from tamias2d.errors import SpaceLocked
-
-cdef extern from "pythread.h":
-    # Safe without the GIL (Cython's declaration lacks nogil).
-    unsigned long tamias_thread_ident "PyThread_get_thread_ident"() nogil
-
-cdef extern from *:
-    """
-    /* Atomics of the pool: sequentially consistent except the index counter
-       (its only job is to hand each index out once). */
-    #if defined(_MSC_VER)
-    #include <intrin.h>
-    static long tamias_take_next(volatile long *counter) {
-        return _InterlockedExchangeAdd(counter, 1);
-    }
-    static long tamias_load(volatile long *p) { return _InterlockedCompareExchange(p, 0, 0); }
-    static void tamias_store(volatile long *p, long v) { _InterlockedExchange(p, v); }
-    static long tamias_add(volatile long *p, long v) { return _InterlockedExchangeAdd(p, v) + v; }
-    #else
-    static long tamias_take_next(volatile long *counter) {
-        return __atomic_fetch_add(counter, 1, __ATOMIC_RELAXED);
-    }
-    static long tamias_load(volatile long *p) { return __atomic_load_n(p, __ATOMIC_SEQ_CST); }
-    static void tamias_store(volatile long *p, long v) { __atomic_store_n(p, v, __ATOMIC_SEQ_CST); }
-    static long tamias_add(volatile long *p, long v) { return __atomic_add_fetch(p, v, __ATOMIC_SEQ_CST); }
-    #endif
-    """
-    long tamias_take_next(volatile long *counter) nogil
-    long tamias_load(volatile long *p) nogil
-    void tamias_store(volatile long *p, long v) nogil
-    long tamias_add(volatile long *p, long v) nogil
-
-cdef extern from *:
-    """
-    /* A monotonic clock in nanoseconds and a pause for spin loops. */
-    #if defined(_WIN32)
-    #include <windows.h>
-    static long long tamias_now_ns(void) {
-        LARGE_INTEGER f, c;
-        QueryPerformanceFrequency(&f);
-        QueryPerformanceCounter(&c);
-        return (long long)((double)c.QuadPart * 1e9 / (double)f.QuadPart);
-    }
-    #define tamias_cpu_relax() YieldProcessor()
-    #else
-    #include <time.h>
-    static long long tamias_now_ns(void) {
-        struct timespec t;
-        clock_gettime(CLOCK_MONOTONIC, &t);
-        return (long long)t.tv_sec * 1000000000LL + t.tv_nsec;
-    }
-    #if defined(__x86_64__) || defined(__i386__)
-    #define tamias_cpu_relax() __builtin_ia32_pause()
-    #elif defined(__aarch64__)
-    #define tamias_cpu_relax() __asm__ __volatile__("yield")
-    #else
-    #define tamias_cpu_relax() ((void)0)
-    #endif
-    #endif
-    """
-    long long tamias_now_ns() nogil
-    void tamias_cpu_relax() nogil
 
 cdef enum:
     MAX_WORKERS = 256

@@ -347,6 +347,7 @@ cdef struct cpSoftSettings:
     cpFloat speculative          # speculative distance, units (< 0: auto)
     int solver                   # TAMIAS_SOLVER_*
     int substeps                 # >= 1
+    int threads                  # a threaded space's Space.threads (1 or 2)
 
 # Per-step scratch of the soft solver, owned by the space (grown, never
 # shrunk; freed by cpSpaceDestroy; never copied).

@@ -89,7 +89,7 @@ from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, cpSpaceGetPostSte
     _firstNonFiniteBody, tamias_first_non_finite_body, _forgetNonFiniteImpulses, OrphanScan,
     _scanOrphans)
 from tamias2d._soft_step cimport (cpSoftStep, SoftSettingsInit, SoftScratchFree, SoftPushOut,
-    SoftSpeculative)
+    SoftSpeculative, SoftPoolEnsure)
 from tamias2d._structs cimport TAMIAS_SOLVER_CHIPMUNK, TAMIAS_SOLVER_SOFT
 from tamias2d._space_query cimport (QueryHit, QueryHits, ShapeQueryHits, cpSpacePointQuery,
     cpSpacePointQueryNearest, cpSpaceSegmentQuery, cpSpaceSegmentQueryFirst, cpSpaceBBQuery,
@@ -831,8 +831,9 @@ cdef class Space:
     :meth:`step` with a fixed time step. Collision callbacks are set with
     :meth:`on_collision`.
 
-    ``threaded`` is accepted for pymunk compatibility; the solver always runs
-    on one thread (which keeps it deterministic). ``solver`` (keyword only,
+    ``threaded`` (with :attr:`threads`) lets the soft solver run a step on
+    two threads, with the same bits as on one; the chipmunk solver, like
+    pymunk's on one thread, always steps on the calling thread. ``solver`` (keyword only,
     not in pymunk) picks the contact solver: ``"chipmunk"``, pymunk's and the
     default, or ``"soft"``, a soft step with substeps (see :attr:`solver`).
 
@@ -1368,10 +1369,17 @@ cdef class Space:
         """The thread count asked of a ``threaded`` space (1 or 2, as pymunk
         clamps it; always 1 for a space that is not threaded).
 
-        Kept for pymunk's API only: tamias2d always solves a step on the
-        calling thread, which keeps results deterministic and equal to a
-        one-thread pymunk step. To use several cores, step separate spaces
-        in separate threads (the step runs without the GIL).
+        In the soft solver (:attr:`solver` ``"soft"``) a threaded space
+        with ``threads = 2`` runs the step's body and contact stages on the
+        calling thread and a worker thread: contacts are coloured so that
+        no two of a colour share a body, and each stage's chunks can be
+        taken by either thread, so the result is bit for bit the one of
+        ``threads = 1`` (and of a space that is not threaded). The narrow
+        phase, joints and Python integrators run on the calling thread.
+        The chipmunk solver always steps on the calling thread (its results
+        are a one-thread pymunk step's). To use more cores, step separate
+        spaces at once (:func:`tamias2d.step_spaces`, or threads: the step
+        runs without the GIL).
 
         >>> import tamias2d
         >>> s = tamias2d.Space(threaded=True)
@@ -1385,7 +1393,7 @@ cdef class Space:
         """
         if not self.threaded:
             return 1
-        return getattr(self, "__dict__").get("_threads", 1)
+        return self._space.soft.threads
 
     @threads.setter
     def threads(self, n):
@@ -1393,7 +1401,7 @@ cdef class Space:
         if not self.threaded:
             return
         # pymunk's threaded space: 0 means 1, at most 2.
-        getattr(self, "__dict__")["_threads"] = 1 if k <= 1 else 2
+        self._space.soft.threads = 1 if k <= 1 else 2
 
     # -- adding and removing ---------------------------------------------------------------
 
@@ -1786,6 +1794,8 @@ cdef class Space:
             self._check_bodies()
             if self._space.constraints.num:
                 tamias_check_constraints(&self._space)
+            if self._space.soft.threads > 1 and self._space.soft.solver == TAMIAS_SOLVER_SOFT:
+                SoftPoolEnsure()
         except BaseException:
             tamias_end_step(&self._space)
             raise
