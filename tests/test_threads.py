@@ -369,7 +369,7 @@ def _soft(build, threads):
 
 def _big_pyramid():
     # Enough bodies and contacts per colour that the stages are shared out.
-    return scenes.pyramid(tamias2d, rows=36)
+    return scenes.pyramid(tamias2d, rows=50)
 
 
 def _run(space, steps):
@@ -381,7 +381,7 @@ def _run(space, steps):
     return snapshot(space)
 
 
-@pytest.mark.parametrize("build", [_big_pyramid, lambda: scenes.rain(tamias2d, count=900)],
+@pytest.mark.parametrize("build", [_big_pyramid, lambda: scenes.rain(tamias2d, count=2500)],
                          ids=["pyramid", "rain"])
 def test_soft_step_on_two_threads_gives_the_one_thread_bits(build):
     from tamias2d import _soft_step

@@ -62,6 +62,9 @@ cdef struct Pair:
     Thread b
     cpCollisionID id                 # narrow-phase cache, handed back on replay
 
+# A pair reported with where the tree keeps its id (NULL: not kept).
+ctypedef void (*cpBBTreeSlotFunc)(void *obj1, void *obj2, cpCollisionID *slot, void *data) noexcept nogil
+
 # -- cpBBTree.c -----------------------------------------------------------------------
 cdef cpBBTree *cpBBTreeAlloc() noexcept nogil
 # NULL when out of memory (the tree is then not allocated / left zeroed).
@@ -70,5 +73,10 @@ cdef cpSpatialIndex *cpBBTreeInit(cpBBTree *tree, cpSpatialIndexBBFunc bbfunc,
 cdef cpSpatialIndex *cpBBTreeNew(cpSpatialIndexBBFunc bbfunc, cpSpatialIndex *staticIndex) noexcept nogil
 cdef void cpBBTreeOptimize(cpSpatialIndex *index) noexcept nogil
 cdef void cpBBTreeSetVelocityFunc(cpSpatialIndex *index, cpBBTreeVelocityFunc func) noexcept nogil
+# The soft solver's broad phase: cpBBTreeReindexQuery reporting where each
+# pair's id lives; false (nothing done) unless the index and its static
+# index are trees.
+cdef bint cpBBTreeReindexQuerySlots(cpSpatialIndex *index, cpBBTreeSlotFunc func,
+                                    void *data) noexcept nogil
 # The tree class table (what GetTree compares klass against).
 cdef cpSpatialIndexClass *cpBBTreeClass() noexcept nogil

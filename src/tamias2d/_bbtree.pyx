@@ -15,7 +15,7 @@ in ``_testing``.
 from libc.stdlib cimport free, qsort
 from libc.string cimport memcpy
 from libc.stdint cimport uintptr_t
-from tamias2d._config cimport TAMIAS_FLOAT_0_1F, CP_BUFFER_BYTES
+from tamias2d._config cimport tamias_prefetch, TAMIAS_FLOAT_0_1F, CP_BUFFER_BYTES
 from tamias2d.vector cimport (cpvmult, cpfmin, cpfmax, cpfabs, cpBBNew, cpBBMerge,
     cpBBArea, cpBBMergedArea, cpBBIntersects, cpBBContainsBB, cpBBSegmentQuery)
 from tamias2d._containers cimport (cpcalloc, cprealloc, cpSetOutOfMemory,
@@ -436,6 +436,9 @@ cdef struct MarkContext:
     Node *staticRoot
     cpSpatialIndexQueryFunc func
     void *data
+    # Set by cpBBTreeReindexQuerySlots instead of func: pairs are reported
+    # with where their id lives, for the caller to store it later.
+    cpBBTreeSlotFunc slotFunc
 
 
 cdef void MarkLeafQuery(Node *subtree, Node *leaf, bint left, MarkContext *context) noexcept nogil:
@@ -452,7 +455,10 @@ cdef void MarkLeafQuery(Node *subtree, Node *leaf, bint left, MarkContext *conte
                 else:
                     if node.node.leaf.stamp < leaf.node.leaf.stamp:
                         PairInsert(node, leaf, context.tree)
-                    context.func(leaf.obj, node.obj, 0, context.data)
+                    if context.slotFunc != NULL:
+                        context.slotFunc(leaf.obj, node.obj, NULL, context.data)
+                    else:
+                        context.func(leaf.obj, node.obj, 0, context.data)
             else:
                 StackPush(&stack, node.node.children.b)
                 StackPush(&stack, node.node.children.a)
@@ -482,7 +488,13 @@ cdef void MarkLeaf(Node *leaf, MarkContext *context) noexcept nogil:
         pair = leaf.node.leaf.pairs
         while pair != NULL:
             if leaf == pair.b.leaf:
-                pair.id = context.func(pair.a.leaf.obj, leaf.obj, pair.id, context.data)
+                # The narrow phase takes long: fetch the next pair meanwhile
+                # (walking the pairs is otherwise a cache miss per pair).
+                tamias_prefetch(pair.b.next)
+                if context.slotFunc != NULL:
+                    context.slotFunc(pair.a.leaf.obj, leaf.obj, &pair.id, context.data)
+                else:
+                    pair.id = context.func(pair.a.leaf.obj, leaf.obj, pair.id, context.data)
                 pair = pair.b.next
             else:
                 pair = pair.a.next
@@ -547,12 +559,14 @@ cdef void LeafAddPairs(Node *leaf, cpBBTree *tree) noexcept nogil:
             context.staticRoot = NULL
             context.func = NULL
             context.data = NULL
+            context.slotFunc = NULL
             MarkLeafQuery(dynamicRoot, leaf, True, &context)
     else:
         context.tree = tree
         context.staticRoot = GetRootIfTree(tree.spatialIndex.staticIndex)
         context.func = VoidQueryFunc
         context.data = NULL
+        context.slotFunc = NULL
         MarkLeaf(leaf, &context)
 
 
@@ -671,10 +685,42 @@ cdef void cpBBTreeReindexQuery(cpSpatialIndex *index, cpSpatialIndexQueryFunc fu
     context.staticRoot = staticRoot
     context.func = func
     context.data = data
+    context.slotFunc = NULL
     MarkSubtree(tree.root, &context)
     if staticIndex != NULL and staticRoot == NULL:
         cpSpatialIndexCollideStatic(<cpSpatialIndex *>tree, staticIndex, func, data)
     IncrementStamp(tree)
+
+
+cdef bint cpBBTreeReindexQuerySlots(cpSpatialIndex *index, cpBBTreeSlotFunc func,
+                                    void *data) noexcept nogil:
+    # cpBBTreeReindexQuery, but each pair is reported with a pointer to the
+    # id the tree keeps for it (NULL for a pair new this step, whose id is
+    # not kept), so that the caller can run the narrow phase later, and in
+    # parallel, and store the ids then. Same pairs in the same order. False
+    # (nothing done) unless this index and its static index are trees.
+    cdef cpBBTree *tree = <cpBBTree *>index
+    cdef cpSpatialIndex *staticIndex
+    cdef Node *staticRoot = NULL
+    cdef MarkContext context
+    if index.klass != &klass:
+        return 0
+    staticIndex = tree.spatialIndex.staticIndex
+    if staticIndex != NULL and staticIndex.klass != &klass:
+        return 0
+    if tree.root == NULL:
+        return 1
+    cpHashSetEach(tree.leaves, LeafUpdateWrap, tree)
+    if staticIndex != NULL:
+        staticRoot = (<cpBBTree *>staticIndex).root
+    context.tree = tree
+    context.staticRoot = staticRoot
+    context.func = NULL
+    context.data = data
+    context.slotFunc = func
+    MarkSubtree(tree.root, &context)
+    IncrementStamp(tree)
+    return 1
 
 
 cdef void cpBBTreeReindex(cpSpatialIndex *index) noexcept nogil:

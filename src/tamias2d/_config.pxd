@@ -22,6 +22,19 @@ cdef extern from *:
     const double TAMIAS_FLOAT_0_1F
     const double TAMIAS_FLOAT_0_9F
 
+cdef extern from *:
+    """
+    /* A hint to fetch a cache line that is about to be read (walks of the
+       broad phase's pairs and the arbiter cache); nothing where the compiler
+       has no such builtin. */
+    #if defined(__GNUC__) || defined(__clang__)
+    #define tamias_prefetch(p) __builtin_prefetch(p)
+    #else
+    #define tamias_prefetch(p) ((void)(p))
+    #endif
+    """
+    void tamias_prefetch(const void *p) nogil
+
 # chipmunk.h / chipmunk_private.h
 cdef enum:
     CP_MAX_CONTACTS_PER_ARBITER = 2

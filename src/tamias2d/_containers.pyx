@@ -307,7 +307,8 @@ cdef const void *cpHashSetInsert(cpHashSet *set, cpHashValue hash, const void *p
     cdef cpHashValue idx = hash % set.size
     cdef cpHashSetBin *bin = set.table[idx]
     cdef void *elt
-    while bin != NULL and not set.eql(ptr, bin.elt):
+    # The stored hash first: a chain's other elements are then not read.
+    while bin != NULL and not (bin.hash == hash and set.eql(ptr, bin.elt)):
         bin = bin.next
     if bin == NULL:
         bin = _getUnusedBin(set)
@@ -333,7 +334,8 @@ cdef const void *cpHashSetRemove(cpHashSet *set, cpHashValue hash, const void *p
     cdef cpHashSetBin **prev_ptr = &set.table[idx]
     cdef cpHashSetBin *bin = set.table[idx]
     cdef const void *elt
-    while bin != NULL and not set.eql(ptr, bin.elt):
+    # The stored hash first: a chain's other elements are then not read.
+    while bin != NULL and not (bin.hash == hash and set.eql(ptr, bin.elt)):
         prev_ptr = &bin.next
         bin = bin.next
     if bin != NULL:
@@ -348,7 +350,8 @@ cdef const void *cpHashSetRemove(cpHashSet *set, cpHashValue hash, const void *p
 cdef const void *cpHashSetFind(cpHashSet *set, cpHashValue hash, const void *ptr) noexcept nogil:
     cdef cpHashValue idx = hash % set.size
     cdef cpHashSetBin *bin = set.table[idx]
-    while bin != NULL and not set.eql(ptr, bin.elt):
+    # The stored hash first: a chain's other elements are then not read.
+    while bin != NULL and not (bin.hash == hash and set.eql(ptr, bin.elt)):
         bin = bin.next
     return bin.elt if bin != NULL else set.default_value
 

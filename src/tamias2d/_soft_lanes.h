@@ -34,10 +34,12 @@ typedef struct {
     double pad;
 } SoftState;
 
-/* SOFT_LANES contact constraints of one colour. Point j of lane k is
- * field[j][k]. An empty lane, or the second point of a one-point manifold,
- * is filled so that it takes no impulse (SoftLanesClear). */
+/* SOFT_LANES contact constraints of one colour, all with `points` points
+ * (one-point manifolds, most of a pile of circles, get a one-row solve).
+ * Point j of lane k is field[j][k]. An empty lane is filled so that it takes
+ * no impulse (SoftLanesClear). */
 typedef struct {
+    int points;                           /* 1 or 2: every lane's manifold has that many */
     int ia[SOFT_LANES], ib[SOFT_LANES];   /* SoftState slots */
     int wa[SOFT_LANES], wb[SOFT_LANES];   /* write the body back (movable, not slot 0) */
     int src[SOFT_LANES];                  /* SoftContact index, -1: empty lane */
@@ -59,19 +61,18 @@ typedef struct {
  * its impulse at zero. */
 #define SOFT_LANE_FAR 1e30
 
-static inline void SoftLanesClear(SoftLanes *c, int k, int j) {
-    /* Lane k's point j (or, with j < 0, the whole lane) takes no impulse. */
+static inline void SoftLanesClear(SoftLanes *c, int k) {
+    /* Lane k (of a colour's last, part-filled lane) takes no impulse: it
+     * joins the immovable slot 0 to itself, its rows far apart. */
     int p;
-    if (j < 0) {
-        c->ia[k] = c->ib[k] = 0;
-        c->wa[k] = c->wb[k] = 0;
-        c->src[k] = -1;
-        c->mA[k] = c->iA[k] = c->mB[k] = c->iB[k] = 0.0;
-        c->nx[k] = 0.0; c->ny[k] = 1.0;
-        c->friction[k] = c->surfaceT[k] = 0.0;
-        c->k11[k] = 1.0; c->k12[k] = 0.0; c->k22[k] = 1.0;
-    }
-    for (p = (j < 0 ? 0 : j); p < 2 && (j < 0 || p == j); p++) {
+    c->ia[k] = c->ib[k] = 0;
+    c->wa[k] = c->wb[k] = 0;
+    c->src[k] = -1;
+    c->mA[k] = c->iA[k] = c->mB[k] = c->iB[k] = 0.0;
+    c->nx[k] = 0.0; c->ny[k] = 1.0;
+    c->friction[k] = c->surfaceT[k] = 0.0;
+    c->k11[k] = 1.0; c->k12[k] = 0.0; c->k22[k] = 1.0;
+    for (p = 0; p < 2; p++) {
         c->rAx[p][k] = c->rAy[p][k] = c->rBx[p][k] = c->rBy[p][k] = 0.0;
         c->rnA[p][k] = c->rnB[p][k] = c->rtA[p][k] = c->rtB[p][k] = 0.0;
         c->base[p][k] = SOFT_LANE_FAR;
@@ -80,12 +81,6 @@ static inline void SoftLanesClear(SoftLanes *c, int k, int j) {
         c->normalImpulse[p][k] = c->tangentImpulse[p][k] = 0.0;
         c->maxNormalImpulse[p][k] = 0.0;
         c->totalNormal[p][k] = c->totalTangent[p][k] = 0.0;
-    }
-    if (j == 1) {
-        /* A one-point manifold: the block solve sees an independent,
-         * separating second row. */
-        c->k12[k] = 0.0;
-        c->k22[k] = 1.0;
     }
 }
 

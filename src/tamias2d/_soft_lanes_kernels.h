@@ -18,7 +18,7 @@ static inline void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftState *st) {
         V nx = L(c->nx), ny = L(c->ny);
         V vax = G(c->ia, vx), vay = G(c->ia, vy), wa = G(c->ia, w);
         V vbx = G(c->ib, vx), vby = G(c->ib, vy), wb = G(c->ib, w);
-        for (j = 0; j < 2; j++) {
+        for (j = 0; j < c->points; j++) {
             /* P = normalImpulse n + tangentImpulse perp(n) */
             V xn = L(c->normalImpulse[j]), xt = L(c->tangentImpulse[j]);
             V px = xn * nx - xt * ny;
@@ -50,7 +50,10 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
         V bias[2], gamma[2];
         V lin, x01, x02, k11, k12, k22, a11, a22, q1, q2, det, x1, x2, y1, z2, n1, n2, d1, d2, imp;
         M ok1, ok2, ok3, ok4;
+        int points = c->points;
         for (j = 0; j < 2; j++) {
+            if (j == 1 && points == 1)
+                break;
             /* The current separation from the bodies' motion in this step. */
             V rAx = L(c->rAx[j]), rAy = L(c->rAy[j]), rBx = L(c->rBx[j]), rBy = L(c->rBy[j]);
             V prAx = qcA * rAx - qsA * rAy, prAy = qsA * rAx + qcA * rAy;
@@ -67,8 +70,28 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
                 gamma[j] = zero;
             }
         }
-        /* Both normal rows at once (the 2x2 LCP, Box2D 2.x's cases). */
         lin = (vbx - vax) * nx + (vby - vay) * ny;
+        if (points == 1) {
+            /* One row: (k + k gamma) dx = -(vn + bias) - k gamma x0, x >= 0. */
+            V m1;
+            x01 = L(c->normalImpulse[0]);
+            k11 = L(c->k11);
+            q1 = lin + wb * L(c->rnB[0]) - wa * L(c->rnA[0]) + bias[0];
+            n1 = x01 - (q1 + k11 * gamma[0] * x01) / (k11 * (one + gamma[0]));
+            n1 = V_SEL(V_LT(n1, zero), zero, n1);
+            S(c->normalImpulse[0], n1);
+            m1 = L(c->maxNormalImpulse[0]);
+            S(c->maxNormalImpulse[0], V_SEL(V_GT(n1, m1), n1, m1));
+            d1 = n1 - x01;
+            vax = vax - mA * (d1 * nx);
+            vay = vay - mA * (d1 * ny);
+            wa = wa - iA * (L(c->rnA[0]) * d1);
+            vbx = vbx + mB * (d1 * nx);
+            vby = vby + mB * (d1 * ny);
+            wb = wb + iB * (L(c->rnB[0]) * d1);
+            goto friction;
+        }
+        /* Both normal rows at once (the 2x2 LCP, Box2D 2.x's cases). */
         x01 = L(c->normalImpulse[0]);
         x02 = L(c->normalImpulse[1]);
         k11 = L(c->k11); k12 = L(c->k12); k22 = L(c->k22);
@@ -107,11 +130,16 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
         vbx = vbx + mB * (imp * nx);
         vby = vby + mB * (imp * ny);
         wb = wb + iB * (L(c->rnB[0]) * d1 + L(c->rnB[1]) * d2);
+    friction:
         if (!useBias) {
             /* Friction in the relax pass only; tangent t = perp(n). */
             V mu = L(c->friction), surfaceT = L(c->surfaceT);
             for (j = 0; j < 2; j++) {
-                V rtA = L(c->rtA[j]), rtB = L(c->rtB[j]);
+                V rtA, rtB;
+                if (j == 1 && points == 1)
+                    break;
+                rtA = L(c->rtA[j]);
+                rtB = L(c->rtB[j]);
                 V vt = ((vby - vay) * nx - (vbx - vax) * ny) + wb * rtB - wa * rtA + surfaceT;
                 V old = L(c->tangentImpulse[j]);
                 V maxF = mu * L(c->normalImpulse[j]);

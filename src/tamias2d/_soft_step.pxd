@@ -76,6 +76,7 @@ cdef extern from "_soft_lanes.h" nogil:
         cpFloat dpx, dpy
         cpFloat qc, qs
     ctypedef struct SoftLanes:
+        int points
         int ia[SOFT_LANES]
         int ib[SOFT_LANES]
         int wa[SOFT_LANES]
@@ -109,7 +110,7 @@ cdef extern from "_soft_lanes.h" nogil:
         cpFloat maxNormalImpulse[2][SOFT_LANES]
         cpFloat totalNormal[2][SOFT_LANES]
         cpFloat totalTangent[2][SOFT_LANES]
-    void SoftLanesClear(SoftLanes *c, int k, int j)
+    void SoftLanesClear(SoftLanes *c, int k)
     void SoftLanesWarmStart(SoftLanes *c, SoftState *st)
     void SoftLanesSolve(SoftLanes *c, SoftState *st, cpFloat inv_h, cpFloat pushOut, int useBias)
     int SoftLanesHaveSimd()

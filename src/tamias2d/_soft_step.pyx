@@ -38,7 +38,7 @@ from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, 
     CP_BODY_TYPE_KINEMATIC, CP_ARBITER_STATE_FIRST_COLLISION)
 from tamias2d._containers cimport cprealloc, cpfree
 from tamias2d._threads cimport (tamias_take_next, tamias_load, tamias_store, tamias_add,
-    tamias_exchange, tamias_cpu_relax, tamias_yield)
+    tamias_exchange, tamias_cpu_relax, tamias_yield, tamias_now_ns)
 from cpython.pythread cimport (PyThread_type_lock, PyThread_allocate_lock,
     PyThread_acquire_lock, PyThread_release_lock, WAIT_LOCK)
 
@@ -48,7 +48,17 @@ from tamias2d.vector cimport cpVect, cpv, cpTransformNewTranspose
 from tamias2d.body cimport cpBodyGetType, cpBodyUpdateVelocity, cpBodyUpdatePosition
 from tamias2d.constraints cimport tamias_constraint_scale_impulse
 from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, StageResetArbiters,
-    StageCollide, cpSpaceProcessComponents, StageFilterArbiterCache, StagePostSolve)
+    cpSpaceProcessComponents, StageFilterArbiterCache, StagePostSolve,
+    cpSpaceRejectPair, cpSpaceAcceptCollision, cpSpacePushFreshContactBuffer,
+    cpContactBufferGetArray, cpSpacePushContacts, cpSpaceCollideShapes, cpShapeUpdateFunc)
+from tamias2d._spatialindex cimport cpSpatialIndexEach, cpSpatialIndexReindexQuery
+from tamias2d._bbtree cimport cpBBTreeReindexQuerySlots
+from tamias2d.collision cimport (cpCollide, CollisionDiagnostics, cpCollisionTakeDiagnostics,
+    cpCollisionPutDiagnostics)
+from tamias2d._config cimport (cpCollisionID, cpHashValue, CP_MAX_CONTACTS_PER_ARBITER,
+    CP_HASH_PAIR, tamias_prefetch)
+from tamias2d._structs cimport cpCollisionInfo, cpHashSet, cpHashSetBin
+from libc.string cimport memcpy
 
 
 # -- settings ------------------------------------------------------------------------
@@ -111,7 +121,11 @@ cdef enum:
     SOFT_SCRATCH_BITS         # the colours' body bitsets
     SOFT_SCRATCH_OVERFLOW
     SOFT_SCRATCH_JOINT_BODIES
+    SOFT_SCRATCH_SOURCE       # each contact's index in space.arbiters
+    SOFT_SCRATCH_CANDIDATES   # the broad phase's pairs (SoftCollide)
     SOFT_SCRATCH_COUNT
+
+# (cpSoftScratch holds 12 buffers.)
 
 cdef void *_reserve(cpSpace *space, int which, int need, size_t size) noexcept nogil:
     # Room for `need` elements of `size` bytes in scratch buffer `which`, or
@@ -134,6 +148,16 @@ cdef void *_reserve(cpSpace *space, int which, int need, size_t size) noexcept n
 
 # -- the step's context -----------------------------------------------------------------
 
+# A pair the broad phase reported, and its narrow phase (SoftCollide).
+cdef struct SoftCandidate:
+    cpShape *a
+    cpShape *b
+    cpCollisionID *slot       # where the broad phase keeps the pair's id (NULL: not kept)
+    cpCollisionID id
+    cpFloat margin            # the pair's (cpSpaceRejectPair)
+    cpCollisionInfo info
+    cpContact contacts[CP_MAX_CONTACTS_PER_ARBITER]
+
 cdef struct SoftContext:
     cpSpace *space
     SoftBody *bodies
@@ -141,10 +165,15 @@ cdef struct SoftContext:
     int bodyCount             # slots, the immovable slot 0 included
     SoftContact *contacts
     int contactCount
+    int *contactSource        # contact i is arbiter contactSource[i] of space.arbiters
+    cpFloat warmCoef, loadCoef   # last step's impulses to this substep's, to a load
     SoftLanes *lanes          # the coloured contacts, colour by colour
     int colorLanes[SOFT_GRAPH_COLORS + 1]   # colour c: lanes[colorLanes[c]:colorLanes[c+1]]
     int *overflow             # SoftContact indices solved one by one
     int overflowCount
+    SoftCandidate *candidates # this step's pairs from the broad phase
+    int candidateCount
+    int candidateCap
     bint threaded             # stages may run on the pool (SoftRun)
     bint serialVelocities     # a body has its own velocity_func (Python: one thread)
     bint serialPositions      # a body has its own position_func
@@ -174,6 +203,99 @@ cdef inline void SoftSetTransform(cpBody *body) noexcept nogil:
     body.transform = cpTransformNewTranspose(
         c, -s, body.p.x - (g.x * c - g.y * s),
         s, c, body.p.y - (g.x * s + g.y * c))
+
+
+# -- collision: the broad phase, then the narrow phase on the pool ---------------------
+# The chipmunk solver runs the narrow phase of each pair as the broad phase
+# reports it (StageCollide). Here the broad phase first lists the pairs
+# (cpBBTreeReindexQuerySlots: same pairs, same order), then the narrow phase
+# of every pair runs, on the pool when the step is threaded (it only reads
+# shapes and bodies, and writes the pair's own contacts and id), then, in the
+# broad phase's order on this thread, the pairs that touch get their
+# arbiters and callbacks (cpSpaceAcceptCollision). A step's contacts are the
+# same whoever ran which pair. A begin or pre-solve callback therefore sees
+# every pair's narrow phase done.
+
+cdef void SoftCollectPair(void *a, void *b, cpCollisionID *slot, void *data) noexcept nogil:
+    # The cheap rejection here (most pairs of the broad phase, whose boxes
+    # are widened for continuous collision, go no further); the narrow phase
+    # of the others later.
+    cdef SoftContext *ctx = <SoftContext *>data
+    cdef SoftCandidate *c
+    cdef int n = ctx.candidateCount
+    cdef cpFloat margin
+    if cpSpaceRejectPair(ctx.space, <cpShape *>a, <cpShape *>b, &margin):
+        return
+    if n >= ctx.candidateCap:
+        ctx.candidates = <SoftCandidate *>_reserve(ctx.space, SOFT_SCRATCH_CANDIDATES, n + 1,
+                                                   sizeof(SoftCandidate))
+        if ctx.candidates == NULL:
+            ctx.candidateCap = 0
+            return  # out of memory: the flag is up, the pair is skipped
+        ctx.candidateCap = ctx.space.softScratch.cap[SOFT_SCRATCH_CANDIDATES]
+    c = &ctx.candidates[n]
+    c.a = <cpShape *>a
+    c.b = <cpShape *>b
+    c.slot = slot
+    c.id = slot[0] if slot != NULL else 0
+    c.margin = margin
+    ctx.candidateCount = n + 1
+
+cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
+    cdef int i
+    cdef SoftCandidate *c
+    for i in range(begin, end):
+        c = &ctx.candidates[i]
+        c.info = cpCollide(c.a, c.b, c.id, c.contacts, c.margin)
+        if c.slot != NULL:
+            c.slot[0] = c.info.id
+
+cdef inline void SoftPrefetchArbiter(cpSpace *space, SoftCandidate *c, int what) noexcept nogil:
+    # what: 0 the table slot of the pair's arbiter, 1 its bin, 2 the arbiter.
+    cdef cpHashSet *arbs = space.cachedArbiters
+    cdef cpHashSetBin **slot
+    if c.info.count == 0:
+        return
+    slot = &arbs.table[CP_HASH_PAIR(<cpHashValue>c.info.a, <cpHashValue>c.info.b) % arbs.size]
+    if what == 0:
+        tamias_prefetch(slot)
+    elif slot[0] != NULL:
+        tamias_prefetch(slot[0] if what == 1 else slot[0].elt)
+
+cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
+    cdef cpSpace *space = ctx.space
+    cdef SoftCandidate *c
+    cdef cpContact *contacts
+    cdef int i
+    cpSpacePushFreshContactBuffer(space)
+    cpSpatialIndexEach(space.dynamicShapes, cpShapeUpdateFunc, NULL)
+    ctx.candidates = <SoftCandidate *>space.softScratch.buf[SOFT_SCRATCH_CANDIDATES]
+    ctx.candidateCap = space.softScratch.cap[SOFT_SCRATCH_CANDIDATES]
+    ctx.candidateCount = 0
+    if not cpBBTreeReindexQuerySlots(space.dynamicShapes, SoftCollectPair, ctx):
+        # A spatial hash: pair by pair, as the chipmunk solver.
+        cpSpatialIndexReindexQuery(space.dynamicShapes, cpSpaceCollideShapes, space)
+        return
+    SoftRun(ctx, SOFT_TASK_NARROW, 0, ctx.candidateCount, 0)
+    for i in range(ctx.candidateCount):
+        # The arbiter cache is a hash set: fetch ahead the table slot, the
+        # bin, then the arbiter of the pairs a few places on.
+        if i + 8 < ctx.candidateCount:
+            SoftPrefetchArbiter(space, &ctx.candidates[i + 8], 0)
+        if i + 4 < ctx.candidateCount:
+            SoftPrefetchArbiter(space, &ctx.candidates[i + 4], 1)
+        if i + 2 < ctx.candidateCount:
+            SoftPrefetchArbiter(space, &ctx.candidates[i + 2], 2)
+        c = &ctx.candidates[i]
+        if c.info.count == 0:
+            continue
+        contacts = cpContactBufferGetArray(space)
+        if contacts == NULL:
+            continue  # out of memory: the flag is up, the pair is skipped
+        memcpy(contacts, c.contacts, c.info.count * sizeof(cpContact))
+        c.info.arr = contacts
+        cpSpacePushContacts(space, c.info.count)
+        cpSpaceAcceptCollision(space, c.a, c.b, &c.info)
 
 
 # -- gather ----------------------------------------------------------------------------
@@ -387,9 +509,36 @@ cdef inline void SoftPointSoftness(SoftPoint *sp, SoftSoftness *base, cpFloat lo
 
 
 cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
+    # The arbiters with contacts, in order, become ctx.contacts (prepared by
+    # SoftPrepareContactRange, on the pool when the step is threaded).
     cdef cpSpace *space = ctx.space
     cdef cpArray *arbiters = space.arbiters
-    cdef int i, j, n = 0
+    cdef int i, n = 0
+    cdef cpArbiter *arb
+    ctx.contacts = <SoftContact *>_reserve(space, SOFT_SCRATCH_CONTACTS, arbiters.num,
+                                           sizeof(SoftContact))
+    ctx.contactSource = <int *>_reserve(space, SOFT_SCRATCH_SOURCE, arbiters.num, sizeof(int))
+    if ctx.contacts == NULL or ctx.contactSource == NULL:
+        return 0
+    ctx.warmCoef = ctx.h / prev_dt if prev_dt != 0.0 else 0.0
+    ctx.loadCoef = 1.0 / prev_dt if prev_dt != 0.0 else 0.0
+    # Each body's number of contacts: a contact is stiffened for its load
+    # only where both of its bodies have at most two (SoftMaxStiffening).
+    for i in range(arbiters.num):
+        arb = <cpArbiter *>arbiters.arr[i]
+        if arb.count <= 0 or arb.contacts == NULL:
+            continue
+        ctx.contactSource[n] = i
+        n += 1
+        ctx.bodies[SoftIndex(arb.body_a, ctx.bodies, ctx.bodyCount)].contacts += 1
+        ctx.bodies[SoftIndex(arb.body_b, ctx.bodies, ctx.bodyCount)].contacts += 1
+    ctx.contactCount = n
+    SoftRun(ctx, SOFT_TASK_PREPARE, 0, n, 0)
+    return 1
+
+cdef void SoftPrepareContactRange(SoftContext *ctx, int begin, int end) noexcept nogil:
+    cdef cpArray *arbiters = ctx.space.arbiters
+    cdef int i, j, n
     cdef cpArbiter *arb
     cdef cpContact *con
     cdef SoftContact *sc
@@ -399,26 +548,12 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     cdef SoftSoftness soft
     cdef cpFloat nx, ny, rnA, rnB, rtA, rtB, kN, kT, sep, warm, size, load
     cdef cpFloat maxStiffening, age, smoothing
-    cdef cpFloat warmCoef = ctx.h / prev_dt if prev_dt != 0.0 else 0.0
-    cdef cpFloat loadCoef = 1.0 / prev_dt if prev_dt != 0.0 else 0.0
+    cdef cpFloat warmCoef = ctx.warmCoef
+    cdef cpFloat loadCoef = ctx.loadCoef
     cdef SoftState *sa
     cdef SoftState *sb
-    ctx.contacts = <SoftContact *>_reserve(space, SOFT_SCRATCH_CONTACTS, arbiters.num,
-                                           sizeof(SoftContact))
-    if ctx.contacts == NULL:
-        return 0
-    # Each body's number of contacts: a contact is stiffened for its load
-    # only where both of its bodies have at most two (SoftMaxStiffening).
-    for i in range(arbiters.num):
-        arb = <cpArbiter *>arbiters.arr[i]
-        if arb.count <= 0 or arb.contacts == NULL:
-            continue
-        ctx.bodies[SoftIndex(arb.body_a, ctx.bodies, ctx.bodyCount)].contacts += 1
-        ctx.bodies[SoftIndex(arb.body_b, ctx.bodies, ctx.bodyCount)].contacts += 1
-    for i in range(arbiters.num):
-        arb = <cpArbiter *>arbiters.arr[i]
-        if arb.count <= 0 or arb.contacts == NULL:
-            continue
+    for n in range(begin, end):
+        arb = <cpArbiter *>arbiters.arr[ctx.contactSource[n]]
         sc = &ctx.contacts[n]
         sc.arb = arb
         sc.ia = SoftIndex(arb.body_a, ctx.bodies, ctx.bodyCount)
@@ -502,9 +637,6 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
             con.bounce = sp.relativeVelocity * arb.e
         if sc.count == 2:
             SoftPrepareBlock(sc, a, b)
-        n += 1
-    ctx.contactCount = n
-    return 1
 
 # Above this condition number the two normal rows are nearly dependent (the
 # points almost coincide) and are solved one after the other instead.
@@ -539,7 +671,8 @@ cdef inline bint SoftMovable(SoftContext *ctx, int slot) noexcept nogil:
 cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
     # Greedy colouring in arbiter order (so a copy continues alike): each
     # contact takes the first colour that holds neither of its movable
-    # bodies; then each colour's contacts are packed SOFT_LANES to a lane.
+    # bodies; then each colour's contacts are packed SOFT_LANES to a lane,
+    # two-point manifolds first, then one-point ones (lanes of one kind).
     cdef cpSpace *space = ctx.space
     cdef int n = ctx.contactCount
     cdef int words = (ctx.bodyCount + 63) >> 6
@@ -549,8 +682,10 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
     cdef int *color
     cdef SoftContact *sc
     cdef SoftLanes *ln
-    cdef int counts[SOFT_GRAPH_COLORS]
-    cdef int fill[SOFT_GRAPH_COLORS]
+    cdef int counts[2][SOFT_GRAPH_COLORS]    # [points - 1][colour]
+    cdef int fill[2][SOFT_GRAPH_COLORS]
+    cdef int start[2][SOFT_GRAPH_COLORS]     # first lane of each kind
+    cdef int kind
     bits = <uint64_t *>_reserve(space, SOFT_SCRATCH_BITS, SOFT_GRAPH_COLORS * words, sizeof(uint64_t))
     color = <int *>_reserve(space, SOFT_SCRATCH_COLORS, n, sizeof(int))
     ctx.overflow = <int *>_reserve(space, SOFT_SCRATCH_OVERFLOW, n, sizeof(int))
@@ -558,8 +693,9 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
         return 0
     memset(bits, 0, <size_t>SOFT_GRAPH_COLORS * words * sizeof(uint64_t))
     for c in range(SOFT_GRAPH_COLORS):
-        counts[c] = 0
-        fill[c] = 0
+        for kind in range(2):
+            counts[kind][c] = 0
+            fill[kind][c] = 0
     ctx.overflowCount = 0
     for i in range(n):
         sc = &ctx.contacts[i]
@@ -586,11 +722,13 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
             ctx.overflow[ctx.overflowCount] = i
             ctx.overflowCount += 1
         else:
-            counts[col] += 1
+            counts[sc.count - 1][col] += 1
     total = 0
     for c in range(SOFT_GRAPH_COLORS):
         ctx.colorLanes[c] = total
-        total += (counts[c] + SOFT_LANES - 1) // SOFT_LANES
+        for kind in range(1, -1, -1):
+            start[kind][c] = total
+            total += (counts[kind][c] + SOFT_LANES - 1) // SOFT_LANES
     ctx.colorLanes[SOFT_GRAPH_COLORS] = total
     ctx.lanes = <SoftLanes *>_reserve(space, SOFT_SCRATCH_LANES, total, sizeof(SoftLanes))
     if ctx.lanes == NULL:
@@ -599,15 +737,18 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
         c = color[i]
         if c == SOFT_GRAPH_COLORS:
             continue
-        SoftPackLane(ctx, &ctx.lanes[ctx.colorLanes[c] + fill[c] // SOFT_LANES],
-                     fill[c] % SOFT_LANES, i)
-        fill[c] += 1
+        kind = ctx.contacts[i].count - 1
+        ln = &ctx.lanes[start[kind][c] + fill[kind][c] // SOFT_LANES]
+        ln.points = kind + 1
+        SoftPackLane(ctx, ln, fill[kind][c] % SOFT_LANES, i)
+        fill[kind][c] += 1
     for c in range(SOFT_GRAPH_COLORS):
-        # A colour's last lane may be part empty.
-        if fill[c] % SOFT_LANES != 0:
-            ln = &ctx.lanes[ctx.colorLanes[c + 1] - 1]
-            for k in range(fill[c] % SOFT_LANES, SOFT_LANES):
-                SoftLanesClear(ln, k, -1)
+        for kind in range(2):
+            # The last lane of a kind may be part empty.
+            if fill[kind][c] % SOFT_LANES != 0:
+                ln = &ctx.lanes[start[kind][c] + fill[kind][c] // SOFT_LANES]
+                for k in range(fill[kind][c] % SOFT_LANES, SOFT_LANES):
+                    SoftLanesClear(ln, k)
     return 1
 
 cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, int k, int i) noexcept nogil:
@@ -634,7 +775,10 @@ cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, int k, int i) noexcept n
         ln.k12[k] = sc.k12
         ln.k22[k] = sc.k22
     else:
+        # The one-row solve's effective mass (k12, k22 unused).
         ln.k11[k] = 1.0 / sc.p[0].normalMass
+        ln.k12[k] = 0.0
+        ln.k22[k] = 1.0
     for j in range(sc.count):
         sp = &sc.p[j]
         ln.rAx[j][k] = sp.rAx
@@ -654,8 +798,6 @@ cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, int k, int i) noexcept n
         ln.maxNormalImpulse[j][k] = 0.0
         ln.totalNormal[j][k] = 0.0
         ln.totalTangent[j][k] = 0.0
-    if sc.count == 1:
-        SoftLanesClear(ln, k, 1)
 
 cdef void SoftWarmStart(SoftContext *ctx) noexcept nogil:
     # The coloured contacts lane by lane, then the overflow one by one.
@@ -887,7 +1029,7 @@ cdef void SoftAccumulateLanes(SoftContext *ctx, int begin, int end) noexcept nog
     cdef SoftLanes *ln
     for i in range(begin, end):
         ln = &ctx.lanes[i]
-        for j in range(2):
+        for j in range(ln.points):
             for k in range(SOFT_LANES):
                 ln.totalNormal[j][k] += ln.normalImpulse[j][k]
                 ln.totalTangent[j][k] += ln.tangentImpulse[j][k]
@@ -1097,17 +1239,24 @@ cdef enum:
     SOFT_TASK_WARM_START
     SOFT_TASK_SOLVE
     SOFT_TASK_ACCUMULATE
+    SOFT_TASK_PREPARE
+    SOFT_TASK_NARROW
 
 cdef enum:
     SOFT_CHUNK_LANES = 32         # lanes of contacts per chunk
     SOFT_CHUNK_BODIES = 128
     SOFT_WORKER_SPIN = 1 << 16    # pauses a worker polls for the next stage before it sleeps
+    SOFT_THREADED_MIN_CONTACTS = 2048
+    SOFT_CHUNK_CONTACTS = 64      # contacts prepared per chunk
+    SOFT_CHUNK_PAIRS = 64         # pairs of the narrow phase per chunk
 
 cdef struct SoftPool:
     volatile long generation      # +1 per stage handed out
     volatile long open            # 1 while the stage's chunks may be taken
     volatile long inside          # workers between their look at `open` and leaving
-    volatile long next            # the next chunk (atomic)
+    volatile long claimed         # chunks claimed so far (atomic)
+    volatile long front           # chunks the caller took, from the front
+    volatile long back            # chunks the worker took, from the back
     volatile long sleeping        # the worker sleeps on `wake`
     volatile long busy            # a step is using the pool
     SoftContext *ctx              # the stage: task, range, flag
@@ -1115,6 +1264,7 @@ cdef struct SoftPool:
     bint flag
     PyThread_type_lock wake
     int workers                   # started (0 or 1)
+    CollisionDiagnostics diag     # the worker's narrow-phase notes of this stage
 
 cdef SoftPool _pool
 cdef long _pool_pid = -1
@@ -1134,14 +1284,26 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
             SoftLanesSolve(&ctx.lanes[i], ctx.states, ctx.inv_h, ctx.pushOut, flag)
     elif task == SOFT_TASK_ACCUMULATE:
         SoftAccumulateLanes(ctx, begin, end)
+    elif task == SOFT_TASK_PREPARE:
+        SoftPrepareContactRange(ctx, begin, end)
+    elif task == SOFT_TASK_NARROW:
+        SoftNarrowPhase(ctx, begin, end)
 
-cdef void SoftTakeChunks() noexcept nogil:
+cdef void SoftTakeChunks(bint caller) noexcept nogil:
+    # The caller takes chunks from the front, the worker from the back: in
+    # every stage each thread starts where it ended the last one, so it
+    # works on the same bodies (contacts are in the broad phase's spatial
+    # order) and their cache lines stay on its core. A claim first, so that
+    # the two ends never take the same chunk.
     cdef long i
     cdef int lo, hi
     while True:
-        i = tamias_take_next(&_pool.next)
-        if i >= _pool.chunks:
+        if tamias_take_next(&_pool.claimed) >= _pool.chunks:
             return
+        if caller:
+            i = tamias_take_next(&_pool.front)
+        else:
+            i = _pool.chunks - 1 - tamias_take_next(&_pool.back)
         lo = _pool.begin + <int>i * _pool.chunk
         hi = lo + _pool.chunk
         if hi > _pool.end:
@@ -1151,7 +1313,13 @@ cdef void SoftTakeChunks() noexcept nogil:
 cdef void SoftRun(SoftContext *ctx, int task, int begin, int end, bint flag) noexcept nogil:
     # One stage over [begin, end): on the pool when the space is threaded
     # and the stage is big enough to share, else here.
-    cdef int chunk = SOFT_CHUNK_BODIES if task <= SOFT_TASK_INTEGRATE_POSITIONS else SOFT_CHUNK_LANES
+    cdef int chunk = SOFT_CHUNK_LANES
+    if task <= SOFT_TASK_INTEGRATE_POSITIONS:
+        chunk = SOFT_CHUNK_BODIES
+    elif task == SOFT_TASK_PREPARE:
+        chunk = SOFT_CHUNK_CONTACTS
+    elif task == SOFT_TASK_NARROW:
+        chunk = SOFT_CHUNK_PAIRS
     cdef int k
     if end <= begin:
         return
@@ -1171,12 +1339,14 @@ cdef void SoftRun(SoftContext *ctx, int task, int begin, int end, bint flag) noe
     _pool.chunk = chunk
     _pool.chunks = (end - begin + chunk - 1) // chunk
     _pool.flag = flag
-    tamias_store(&_pool.next, 0)
+    tamias_store(&_pool.claimed, 0)
+    tamias_store(&_pool.front, 0)
+    tamias_store(&_pool.back, 0)
     tamias_store(&_pool.open, 1)
     tamias_add(&_pool.generation, 1)
     if tamias_exchange(&_pool.sleeping, 0) == 1:
         PyThread_release_lock(_pool.wake)
-    SoftTakeChunks()
+    SoftTakeChunks(1)
     tamias_store(&_pool.open, 0)
     k = 0
     while tamias_load(&_pool.inside) != 0:
@@ -1186,10 +1356,16 @@ cdef void SoftRun(SoftContext *ctx, int task, int begin, int end, bint flag) noe
             tamias_cpu_relax()
         else:
             tamias_yield()
+    if task == SOFT_TASK_NARROW:
+        # What the worker's narrow phase noted (per-thread flags) is the
+        # step's, as if this thread had run it.
+        cpCollisionPutDiagnostics(_pool.diag)
+        memset(&_pool.diag, 0, sizeof(CollisionDiagnostics))
 
 cdef void SoftWorkerMain(void *arg) noexcept nogil:
     cdef long seen = tamias_load(&_pool.generation)
     cdef long spins
+    cdef CollisionDiagnostics d
     while True:
         spins = 0
         while tamias_load(&_pool.generation) == seen:
@@ -1206,13 +1382,22 @@ cdef void SoftWorkerMain(void *arg) noexcept nogil:
         seen = tamias_load(&_pool.generation)
         tamias_add(&_pool.inside, 1)
         if tamias_load(&_pool.open):
-            SoftTakeChunks()
+            SoftTakeChunks(0)
+            if _pool.task == SOFT_TASK_NARROW:
+                d = cpCollisionTakeDiagnostics()
+                _pool.diag.flags |= d.flags
+                if d.gjk_iter > _pool.diag.gjk_iter:
+                    _pool.diag.gjk_iter = d.gjk_iter
+                if d.epa_iter > _pool.diag.epa_iter:
+                    _pool.diag.epa_iter = d.epa_iter
         tamias_add(&_pool.inside, -1)
 
 cdef bint SoftPoolAcquire(cpSpace *space) noexcept nogil:
     # The pool serves one step at a time; another space stepped meanwhile
     # (from another thread) runs on its own thread, with the same result.
-    if space.soft.threads <= 1 or _pool.workers == 0:
+    # A small step runs on one thread: below some thousand contacts, two
+    # threads trading the bodies' cache lines cost more than they share.
+    if space.soft.threads <= 1 or _pool.workers == 0 or space.arbiters.num < SOFT_THREADED_MIN_CONTACTS:
         return 0
     return tamias_exchange(&_pool.busy, 1) == 0
 
@@ -1236,6 +1421,58 @@ cdef int SoftPoolEnsure() except -1:
     _pool.workers = 1
     _pool_pid = pid
     return 0
+
+
+# -- a profile of the step, stage by stage (benchmarks/soft_profile.py) ---------------
+
+cdef enum:
+    SOFT_STAGE_COLLIDE = 0        # broad and narrow phase, arbiters, begin / pre_solve
+    SOFT_STAGE_COMPONENTS         # contact graph, sleeping, the arbiter cache's filter
+    SOFT_STAGE_PREPARE            # bodies, joints and contacts gathered and prepared
+    SOFT_STAGE_COLOR              # the constraint graph's colours, contacts into lanes
+    SOFT_STAGE_INTEGRATE          # velocities and positions, every substep
+    SOFT_STAGE_WARM_START
+    SOFT_STAGE_SOLVE              # the biased (soft) pass
+    SOFT_STAGE_RELAX              # the relax passes
+    SOFT_STAGE_FINISH             # restitution, impulses stored, bodies written back, post_solve
+    SOFT_STAGE_COUNT
+
+SOFT_STAGE_NAMES = ("collide", "components", "prepare", "color", "integrate", "warm start",
+                    "solve", "relax", "finish")
+
+# Off unless a profile is asked for (a process-wide switch: profile one
+# space at a time). On, each stage costs one clock read.
+cdef bint _profiling = 0
+cdef long long _profile_ns[SOFT_STAGE_COUNT]
+cdef long long _profile_last = 0
+cdef long _profile_steps = 0
+
+cdef inline void SoftProfileMark(int stage) noexcept nogil:
+    # The time since the last mark goes to `stage` (-1: a step begins).
+    global _profile_last, _profile_steps
+    cdef long long now
+    if not _profiling:
+        return
+    now = tamias_now_ns()
+    if stage < 0:
+        _profile_steps += 1
+    else:
+        _profile_ns[stage] += now - _profile_last
+    _profile_last = now
+
+def _profile(on):
+    """Switch the stage profile of soft steps on or off; returns what was
+    collected since the last call, {stage: ms per step}, and resets it."""
+    global _profiling, _profile_steps
+    cdef int i
+    steps = _profile_steps
+    out = {SOFT_STAGE_NAMES[i]: (_profile_ns[i] / 1e6 / steps if steps else 0.0)
+           for i in range(SOFT_STAGE_COUNT)}
+    for i in range(SOFT_STAGE_COUNT):
+        _profile_ns[i] = 0
+    _profile_steps = 0
+    _profiling = bool(on)
+    return out
 
 
 # -- the step -----------------------------------------------------------------------------
@@ -1279,43 +1516,56 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     ctx.threaded = 0
     space.collideMargin = SoftSpeculative(space)
 
+    SoftProfileMark(-1)
+    # (Last step's contact count decides whether this one is threaded.)
+    ctx.threaded = SoftPoolAcquire(space)
     StageResetArbiters(space)
     cpSpaceLock(space)
     # No position update before the narrow phase: this solver moves the
     # bodies inside its substeps.
-    StageCollide(space)
+    SoftCollide(&ctx)
     collided = space.arbiters.num
     cpSpaceUnlock(space, 0)
+    SoftProfileMark(SOFT_STAGE_COLLIDE)
 
     cpSpaceProcessComponents(space, dt, collided)
 
     cpSpaceLock(space)
     StageFilterArbiterCache(space)
+    SoftProfileMark(SOFT_STAGE_COMPONENTS)
     ready = (SoftGatherBodies(&ctx) and SoftPrepareJoints(&ctx, prev_dt)
-             and SoftPrepareContacts(&ctx, prev_dt) and SoftColorContacts(&ctx))
+             and SoftPrepareContacts(&ctx, prev_dt))
+    SoftProfileMark(SOFT_STAGE_PREPARE)
+    ready = ready and SoftColorContacts(&ctx)
+    SoftProfileMark(SOFT_STAGE_COLOR)
     if ready:
-        ctx.threaded = SoftPoolAcquire(space)
         for k in range(ctx.substeps):
             SoftRun(&ctx, SOFT_TASK_INTEGRATE_VELOCITIES, 1, ctx.bodyCount, k == ctx.substeps - 1)
+            SoftProfileMark(SOFT_STAGE_INTEGRATE)
             SoftJointsWarmStart(&ctx)
             SoftWarmStart(&ctx)
+            SoftProfileMark(SOFT_STAGE_WARM_START)
             SoftJointsSolve(&ctx)
             SoftSolve(&ctx, 1)
+            SoftProfileMark(SOFT_STAGE_SOLVE)
             SoftRun(&ctx, SOFT_TASK_INTEGRATE_POSITIONS, 1, ctx.bodyCount, 0)
+            SoftProfileMark(SOFT_STAGE_INTEGRATE)
             for r in range(SOFT_RELAX_ITERATIONS):
                 SoftJointsSolve(&ctx)
                 SoftRelax(&ctx)
             SoftAccumulate(&ctx)
-        if ctx.threaded:
-            SoftPoolRelease()
-            ctx.threaded = 0
+            SoftProfileMark(SOFT_STAGE_RELAX)
         SoftUnpackLanes(&ctx)
         SoftApplyRestitution(&ctx)
         SoftStoreImpulses(&ctx)
         SoftFinishBodies(&ctx)
         SoftFinishJoints(&ctx)
+    if ctx.threaded:
+        SoftPoolRelease()
+        ctx.threaded = 0
     StagePostSolve(space)
     cpSpaceUnlock(space, 1)
+    SoftProfileMark(SOFT_STAGE_FINISH)
 
 
 # -- test switches -------------------------------------------------------------------------

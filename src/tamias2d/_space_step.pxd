@@ -16,7 +16,7 @@
 #   StagePostSolve           post-solve callbacks
 #   cpSpaceUnlock(space, 1)  post-step callbacks, objects woken meanwhile
 from tamias2d._config cimport cpFloat, cpBool, cpCollisionID
-from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArray, cpContact,
+from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArray, cpContact, cpCollisionInfo,
     cpPostStepCallback, cpPostStepFunc, CP_BODY_TYPE_DYNAMIC)
 from tamias2d.body cimport cpBodyGetType
 
@@ -50,6 +50,12 @@ cdef void StagePostSolve(cpSpace *space) noexcept nogil
 # The broad phase callback of StageCollide, and the cache filter of
 # StageFilterArbiterCache.
 cdef cpCollisionID cpSpaceCollideShapes(void *a, void *b, cpCollisionID id, void *space) noexcept nogil
+# cpSpaceCollideShapes in parts, for a narrow phase run apart (the soft
+# solver's, on several threads): the rejection test and the pair's margin,
+# then (the contacts on the contact buffer) arbiter, callbacks, this step's list.
+cdef cpBool cpSpaceRejectPair(cpSpace *space, cpShape *a, cpShape *b, cpFloat *margin) noexcept nogil
+cdef void cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
+                                 cpCollisionInfo *info) noexcept nogil
 cdef cpBool cpSpaceArbiterSetFilter(void *arb, void *space) noexcept nogil
 # cpShapeCacheBB as a spatial-index iterator.
 cdef void cpShapeUpdateFunc(void *shape, void *unused) noexcept nogil

@@ -223,18 +223,11 @@ cdef inline cpBool QueryReject(cpShape *a, cpShape *b, cpFloat margin) noexcept 
             or cpShapeFilterReject(a.filter, b.filter)
             or QueryRejectConstraint(a.body, b.body))
 
-# The broad phase callback: narrow phase, arbiter lookup, handlers.
-cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID id,
-                                        void *data) noexcept nogil:
-    cdef cpShape *a = <cpShape *>obj_a
-    cdef cpShape *b = <cpShape *>obj_b
-    cdef cpSpace *space = <cpSpace *>data
-    cdef cpContact *contacts
-    cdef cpCollisionInfo info
-    cdef const cpShape *shape_pair[2]
-    cdef cpHashValue arbHashID
-    cdef cpArbiter *arb
-
+# The margin of a pair (the soft solver's speculative distance, plus, for
+# continuous collision, how far the pair closes in this step) and whether
+# the broad phase's pair is rejected before the narrow phase.
+cdef cpBool cpSpaceRejectPair(cpSpace *space, cpShape *a, cpShape *b,
+                              cpFloat *margin_out) noexcept nogil:
     cdef cpFloat margin = space.collideMargin
     cdef cpVect dv
     if margin != 0.0 and (a.body.m_inv == 0.0 or b.body.m_inv == 0.0
@@ -248,7 +241,19 @@ cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID 
         # in piles.
         dv = cpvsub(b.body.v, a.body.v)
         margin += sqrt(cpvlengthsq(dv)) * space.curr_dt
-    if QueryReject(a, b, margin):
+    margin_out[0] = margin
+    return QueryReject(a, b, margin)
+
+# The broad phase callback: narrow phase, arbiter lookup, handlers.
+cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID id,
+                                        void *data) noexcept nogil:
+    cdef cpShape *a = <cpShape *>obj_a
+    cdef cpShape *b = <cpShape *>obj_b
+    cdef cpSpace *space = <cpSpace *>data
+    cdef cpContact *contacts
+    cdef cpCollisionInfo info
+    cdef cpFloat margin
+    if cpSpaceRejectPair(space, a, b, &margin):
         return id
 
     contacts = cpContactBufferGetArray(space)
@@ -258,6 +263,17 @@ cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID 
     if info.count == 0:
         return info.id
     cpSpacePushContacts(space, info.count)
+    cpSpaceAcceptCollision(space, a, b, &info)
+    return info.id
+
+# What follows the narrow phase for a pair that touches (its contacts pushed
+# on the space's contact buffer): the persistent arbiter, begin and
+# pre-solve callbacks, the arbiter into this step's list.
+cdef void cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
+                                 cpCollisionInfo *info) noexcept nogil:
+    cdef const cpShape *shape_pair[2]
+    cdef cpHashValue arbHashID
+    cdef cpArbiter *arb
 
     # The persistent arbiter of the pair, keyed by the two shape pointers.
     shape_pair[0] = info.a
@@ -271,8 +287,8 @@ cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID 
         # its pass, as a query moves the hash's stamp on. Munk2D pushes the
         # arbiter twice; threaded twice, it makes the flood fill loop.)
         cpSpacePopContacts(space, info.count)
-        return info.id
-    cpArbiterUpdate(arb, &info, space)
+        return
+    cpArbiterUpdate(arb, info, space)
 
     if arb.state == CP_ARBITER_STATE_FIRST_COLLISION:
         cpCallHandlers(arb, space, PHASE_BEGIN, True)
@@ -294,7 +310,6 @@ cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID 
             arb.state = CP_ARBITER_STATE_NORMAL
 
     arb.stamp = space.stamp
-    return info.id
 
 # Per-step filter of the arbiter cache: separate callbacks and expiry.
 cdef cpBool cpSpaceArbiterSetFilter(void *elt, void *data) noexcept nogil:

@@ -352,8 +352,8 @@ cdef struct cpSoftSettings:
 # Per-step scratch of the soft solver, owned by the space (grown, never
 # shrunk; freed by cpSpaceDestroy; never copied).
 cdef struct cpSoftScratch:
-    void *buf[8]                 # indexed by _soft_step's SOFT_SCRATCH_*
-    int cap[8]                   # elements each buffer has room for
+    void *buf[12]                # indexed by _soft_step's SOFT_SCRATCH_* (< 12)
+    int cap[12]                  # elements each buffer has room for
 
 cdef struct cpContactBufferHeader:
     cpTimestamp stamp

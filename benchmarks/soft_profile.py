@@ -1,0 +1,88 @@
+"""Where the soft solver's step spends its time, stage by stage.
+
+Runs each scene at the soft solver's defaults on one thread and on two
+(``Space(threaded=True)``, ``threads = 2``) and prints the wall time per
+step of each stage of cpSoftStep (the stage profile of ``_soft_step``, one
+clock read per stage). Wall time, not instruction counts: the narrow phase
+is bound by memory latency (pointer chasing through the broad phase's pairs,
+the arbiter hash set, shapes and bodies), which instruction counts hide.
+`valgrind --tool=callgrind` counts and `perf record` samples of the same
+scenes are in docs/benchmarks.md.
+
+    PYTHONPATH=src:tests python benchmarks/soft_profile.py [--steps 120] [--quick]
+"""
+import argparse
+import os
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
+
+import tamias2d  # noqa: E402
+from tamias2d import _soft_step  # noqa: E402
+import scenes  # noqa: E402
+
+
+def large_pyramid(base=100):
+    """Box2D's large_pyramid benchmark: base 100 (5,050 boxes 1x1) on a
+    200x2 ground, gravity 10, friction 0.6 (the ground's 1: tamias2d
+    multiplies the two)."""
+    space = tamias2d.Space()
+    space.gravity = 0, -10
+    ground = tamias2d.Poly(space.static_body, [(-100, -2), (100, -2), (100, 0), (-100, 0)])
+    ground.friction = 1.0
+    space.add(ground)
+    for i in range(base):
+        for j in range(i, base):
+            body = tamias2d.Body(1.0, tamias2d.moment_for_box(1.0, (1.0, 1.0)))
+            body.position = (i + 1) / 2 + (j - i) - base / 2, i + 0.5
+            box = tamias2d.Poly.create_box(body, (1.0, 1.0))
+            box.friction = 0.6
+            space.add(body, box)
+    return space
+
+
+SCENES = {
+    "large_pyramid": large_pyramid,
+    "pyramid_20": lambda: large_pyramid(20),
+    "rain": lambda: scenes.rain(tamias2d),
+    "drum": lambda: scenes.drum(tamias2d),
+}
+
+
+def profile(build, threads, steps, warm):
+    space = build()
+    space.solver = "soft"
+    space.threaded = True
+    space.threads = threads
+    hook = getattr(space, "scene_hook", None)
+    for i in range(warm + steps):
+        if i == warm:
+            _soft_step._profile(True)
+        if hook is not None:
+            hook(i)
+        space.step(1 / 60)
+    return _soft_step._profile(False)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steps", type=int, default=120)
+    ap.add_argument("--warm", type=int, default=30)
+    ap.add_argument("--quick", action="store_true", help="a few steps of the small scenes")
+    args = ap.parse_args()
+    names = list(SCENES)
+    if args.quick:
+        names = ["pyramid_20", "drum"]
+        args.steps, args.warm = 10, 5
+    stages = list(_soft_step.SOFT_STAGE_NAMES)
+    print("| scene | threads | " + " | ".join(stages) + " | step ms |")
+    print("|---|---|" + "---|" * (len(stages) + 1))
+    for name in names:
+        for threads in (1, 2):
+            ms = profile(SCENES[name], threads, args.steps, args.warm)
+            cells = " | ".join(f"{ms[s]:.3f}" for s in stages)
+            print(f"| {name} | {threads} | {cells} | {sum(ms.values()):.3f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
