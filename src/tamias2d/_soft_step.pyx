@@ -36,7 +36,7 @@ from tamias2d._config cimport cpFloat, cpBool
 from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, cpArray, cpConstraint,
     cpSoftSettings, cpSoftScratch, TAMIAS_SOLVER_CHIPMUNK, TAMIAS_SOLVER_SOFT,
     CP_BODY_TYPE_KINEMATIC, CP_ARBITER_STATE_FIRST_COLLISION)
-from tamias2d._containers cimport cprealloc, cpfree
+from tamias2d._containers cimport cprealloc, cpfree, cpHashSetFind
 from tamias2d._threads cimport (tamias_take_next, tamias_load, tamias_store, tamias_add,
     tamias_exchange, tamias_cpu_relax, tamias_yield, tamias_now_ns)
 from cpython.pythread cimport (PyThread_type_lock, PyThread_allocate_lock,
@@ -57,7 +57,7 @@ from tamias2d.collision cimport (cpCollide, CollisionDiagnostics, cpCollisionTak
     cpCollisionPutDiagnostics)
 from tamias2d._config cimport (cpCollisionID, cpHashValue, CP_MAX_CONTACTS_PER_ARBITER,
     CP_HASH_PAIR, tamias_prefetch)
-from tamias2d._structs cimport cpCollisionInfo, cpHashSet, cpHashSetBin
+from tamias2d._structs cimport cpCollisionInfo, cpHashSet
 from libc.string cimport memcpy
 
 
@@ -155,6 +155,7 @@ cdef struct SoftCandidate:
     cpCollisionID *slot       # where the broad phase keeps the pair's id (NULL: not kept)
     cpCollisionID id
     cpFloat margin            # the pair's (cpSpaceRejectPair)
+    cpArbiter *arb            # its arbiter if cached (looked up with the narrow phase)
     cpCollisionInfo info
     cpContact contacts[CP_MAX_CONTACTS_PER_ARBITER]
 
@@ -242,25 +243,32 @@ cdef void SoftCollectPair(void *a, void *b, cpCollisionID *slot, void *data) noe
     ctx.candidateCount = n + 1
 
 cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
+    # Also finds a touching pair's cached arbiter: the cache is only read
+    # here (pairs new this step get theirs afterwards, on the calling thread).
     cdef int i
     cdef SoftCandidate *c
+    cdef const cpShape *pair[2]
     for i in range(begin, end):
         c = &ctx.candidates[i]
         c.info = cpCollide(c.a, c.b, c.id, c.contacts, c.margin)
         if c.slot != NULL:
             c.slot[0] = c.info.id
+        c.arb = NULL
+        if c.info.count > 0:
+            pair[0] = c.info.a
+            pair[1] = c.info.b
+            c.arb = <cpArbiter *>cpHashSetFind(ctx.space.cachedArbiters,
+                CP_HASH_PAIR(<cpHashValue>c.info.a, <cpHashValue>c.info.b), pair)
 
-cdef inline void SoftPrefetchArbiter(cpSpace *space, SoftCandidate *c, int what) noexcept nogil:
-    # what: 0 the table slot of the pair's arbiter, 1 its bin, 2 the arbiter.
+cdef inline void SoftPrefetchArbiter(cpSpace *space, SoftCandidate *c) noexcept nogil:
     cdef cpHashSet *arbs = space.cachedArbiters
-    cdef cpHashSetBin **slot
     if c.info.count == 0:
         return
-    slot = &arbs.table[CP_HASH_PAIR(<cpHashValue>c.info.a, <cpHashValue>c.info.b) % arbs.size]
-    if what == 0:
-        tamias_prefetch(slot)
-    elif slot[0] != NULL:
-        tamias_prefetch(slot[0] if what == 1 else slot[0].elt)
+    if c.arb != NULL:
+        tamias_prefetch(c.arb)
+    else:
+        tamias_prefetch(&arbs.table[CP_HASH_PAIR(<cpHashValue>c.info.a,
+                                                 <cpHashValue>c.info.b) % arbs.size])
 
 cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     cdef cpSpace *space = ctx.space
@@ -278,14 +286,10 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
         return
     SoftRun(ctx, SOFT_TASK_NARROW, 0, ctx.candidateCount, 0)
     for i in range(ctx.candidateCount):
-        # The arbiter cache is a hash set: fetch ahead the table slot, the
-        # bin, then the arbiter of the pairs a few places on.
-        if i + 8 < ctx.candidateCount:
-            SoftPrefetchArbiter(space, &ctx.candidates[i + 8], 0)
+        # Fetch the arbiter of a pair a few places on (or, for a pair new
+        # this step, its slot of the arbiter cache).
         if i + 4 < ctx.candidateCount:
-            SoftPrefetchArbiter(space, &ctx.candidates[i + 4], 1)
-        if i + 2 < ctx.candidateCount:
-            SoftPrefetchArbiter(space, &ctx.candidates[i + 2], 2)
+            SoftPrefetchArbiter(space, &ctx.candidates[i + 4])
         c = &ctx.candidates[i]
         if c.info.count == 0:
             continue
@@ -295,7 +299,7 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
         memcpy(contacts, c.contacts, c.info.count * sizeof(cpContact))
         c.info.arr = contacts
         cpSpacePushContacts(space, c.info.count)
-        cpSpaceAcceptCollision(space, c.a, c.b, &c.info)
+        cpSpaceAcceptCollision(space, c.a, c.b, &c.info, c.arb)
 
 
 # -- gather ----------------------------------------------------------------------------

@@ -17,6 +17,7 @@
 #   cpSpaceUnlock(space, 1)  post-step callbacks, objects woken meanwhile
 from tamias2d._config cimport cpFloat, cpBool, cpCollisionID
 from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArray, cpContact, cpCollisionInfo,
+    cpArbiter,
     cpPostStepCallback, cpPostStepFunc, CP_BODY_TYPE_DYNAMIC)
 from tamias2d.body cimport cpBodyGetType
 
@@ -55,7 +56,7 @@ cdef cpCollisionID cpSpaceCollideShapes(void *a, void *b, cpCollisionID id, void
 # then (the contacts on the contact buffer) arbiter, callbacks, this step's list.
 cdef cpBool cpSpaceRejectPair(cpSpace *space, cpShape *a, cpShape *b, cpFloat *margin) noexcept nogil
 cdef void cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
-                                 cpCollisionInfo *info) noexcept nogil
+                                 cpCollisionInfo *info, cpArbiter *found) noexcept nogil
 cdef cpBool cpSpaceArbiterSetFilter(void *arb, void *space) noexcept nogil
 # cpShapeCacheBB as a spatial-index iterator.
 cdef void cpShapeUpdateFunc(void *shape, void *unused) noexcept nogil

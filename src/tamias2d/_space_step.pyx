@@ -263,14 +263,15 @@ cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID 
     if info.count == 0:
         return info.id
     cpSpacePushContacts(space, info.count)
-    cpSpaceAcceptCollision(space, a, b, &info)
+    cpSpaceAcceptCollision(space, a, b, &info, NULL)
     return info.id
 
 # What follows the narrow phase for a pair that touches (its contacts pushed
-# on the space's contact buffer): the persistent arbiter, begin and
+# on the space's contact buffer): the persistent arbiter (`found` if the
+# caller looked it up already, else looked up or made here), begin and
 # pre-solve callbacks, the arbiter into this step's list.
 cdef void cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
-                                 cpCollisionInfo *info) noexcept nogil:
+                                 cpCollisionInfo *info, cpArbiter *found) noexcept nogil:
     cdef const cpShape *shape_pair[2]
     cdef cpHashValue arbHashID
     cdef cpArbiter *arb
@@ -278,9 +279,11 @@ cdef void cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
     # The persistent arbiter of the pair, keyed by the two shape pointers.
     shape_pair[0] = info.a
     shape_pair[1] = info.b
-    arbHashID = CP_HASH_PAIR(<cpHashValue>info.a, <cpHashValue>info.b)
-    arb = <cpArbiter *>cpHashSetInsert(space.cachedArbiters, arbHashID, shape_pair,
-                                       cpSpaceArbiterSetTrans, space)
+    arb = found
+    if arb == NULL:
+        arbHashID = CP_HASH_PAIR(<cpHashValue>info.a, <cpHashValue>info.b)
+        arb = <cpArbiter *>cpHashSetInsert(space.cachedArbiters, arbHashID, shape_pair,
+                                           cpSpaceArbiterSetTrans, space)
     if arb == NULL or arb.stamp == space.stamp:
         # (Or the pair was handled already in this step: the spatial hash
         # reports a pair again when a callback runs a query in the middle of
