@@ -668,9 +668,10 @@ cdef void LeafUpdateWrap(void *elt, void *data) noexcept nogil:
     LeafUpdate(<Node *>elt, <cpBBTree *>data)
 
 
-cdef void cpBBTreeReindexQuery(cpSpatialIndex *index, cpSpatialIndexQueryFunc func,
-                               void *data) noexcept nogil:
-    cdef cpBBTree *tree = <cpBBTree *>index
+cdef void ReindexQuery(cpBBTree *tree, cpSpatialIndexQueryFunc func, cpBBTreeSlotFunc slotFunc,
+                       void *data) noexcept nogil:
+    # Pairs go to func (the id it returns is kept) or, with slotFunc, to
+    # slotFunc with where the id lives.
     cdef cpSpatialIndex *staticIndex
     cdef Node *staticRoot = NULL
     cdef MarkContext context
@@ -685,11 +686,16 @@ cdef void cpBBTreeReindexQuery(cpSpatialIndex *index, cpSpatialIndexQueryFunc fu
     context.staticRoot = staticRoot
     context.func = func
     context.data = data
-    context.slotFunc = NULL
+    context.slotFunc = slotFunc
     MarkSubtree(tree.root, &context)
-    if staticIndex != NULL and staticRoot == NULL:
+    if staticIndex != NULL and staticRoot == NULL and func != NULL:
         cpSpatialIndexCollideStatic(<cpSpatialIndex *>tree, staticIndex, func, data)
     IncrementStamp(tree)
+
+
+cdef void cpBBTreeReindexQuery(cpSpatialIndex *index, cpSpatialIndexQueryFunc func,
+                               void *data) noexcept nogil:
+    ReindexQuery(<cpBBTree *>index, func, NULL, data)
 
 
 cdef bint cpBBTreeReindexQuerySlots(cpSpatialIndex *index, cpBBTreeSlotFunc func,
@@ -699,27 +705,13 @@ cdef bint cpBBTreeReindexQuerySlots(cpSpatialIndex *index, cpBBTreeSlotFunc func
     # not kept), so that the caller can run the narrow phase later, and in
     # parallel, and store the ids then. Same pairs in the same order. False
     # (nothing done) unless this index and its static index are trees.
-    cdef cpBBTree *tree = <cpBBTree *>index
     cdef cpSpatialIndex *staticIndex
-    cdef Node *staticRoot = NULL
-    cdef MarkContext context
     if index.klass != &klass:
         return 0
-    staticIndex = tree.spatialIndex.staticIndex
+    staticIndex = (<cpBBTree *>index).spatialIndex.staticIndex
     if staticIndex != NULL and staticIndex.klass != &klass:
         return 0
-    if tree.root == NULL:
-        return 1
-    cpHashSetEach(tree.leaves, LeafUpdateWrap, tree)
-    if staticIndex != NULL:
-        staticRoot = (<cpBBTree *>staticIndex).root
-    context.tree = tree
-    context.staticRoot = staticRoot
-    context.func = NULL
-    context.data = data
-    context.slotFunc = func
-    MarkSubtree(tree.root, &context)
-    IncrementStamp(tree)
+    ReindexQuery(<cpBBTree *>index, NULL, func, data)
     return 1
 
 

@@ -122,19 +122,6 @@ static inline void soft_v_scatter(SoftState *st, const int *idx, const int *w, i
 /* Of three exclusive masks, the value of the one that is set, else +0.0. */
 #define V_PICK3(m1, a, m2, b, m3, c) ((V)(((M)(a) & (m1)) | ((M)(b) & (m2)) | ((M)(c) & (m3))))
 #include "_soft_lanes_kernels.h"
-#undef V
-#undef M
-#undef SOFT_KERNEL
-#undef LOOP_LANES
-#undef V_SEL
-#undef V_GT
-#undef V_GE
-#undef V_LT
-#undef V_AND
-#undef V_OR
-#undef V_PICK3
-#undef V_NOT
-#undef V_ANDNOT
 #else
 #define SOFT_HAVE_SIMD 0
 #endif
@@ -167,24 +154,6 @@ static inline void soft_s_scatter(SoftState *st, const int *idx, const int *w, i
 #define V_NOT(m) (!(m))
 #define V_PICK3(m1, a, m2, b, m3, c) ((m1) ? (a) : (m2) ? (b) : (m3) ? (c) : 0.0)
 #include "_soft_lanes_kernels.h"
-#undef V
-#undef M
-#undef SOFT_KERNEL
-#undef LOOP_LANES
-#undef soft_v_load
-#undef soft_v_store
-#undef soft_v_splat
-#undef soft_v_gather
-#undef soft_v_scatter
-#undef V_SEL
-#undef V_GT
-#undef V_GE
-#undef V_LT
-#undef V_AND
-#undef V_OR
-#undef V_PICK3
-#undef V_NOT
-#undef V_ANDNOT
 
 /* The path the solver takes: the vector kernels where the compiler has
  * them, unless soft_lanes_use_scalar is set (a test switch). */

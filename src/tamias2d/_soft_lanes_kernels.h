@@ -1,7 +1,8 @@
 /* The contact kernels of the soft solver over SoftLanes, written once over
  * the lane type V (mask type M). Included twice by _soft_lanes.h, which
  * defines V, M, SOFT_KERNEL, LOOP_LANES, the soft_v_* accessors and the V_*
- * comparisons and selects; no include guard on purpose.
+ * comparisons and selects (undefined again at the end of this file); no
+ * include guard on purpose.
  *
  * Same arithmetic as SoftSolve in _soft_step.pyx (the scalar solver of the
  * contacts that are not packed into lanes); see there for the why. */
@@ -165,3 +166,23 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
 #undef S
 #undef G
 #undef P
+
+/* The instantiation's macros, for the next one. */
+#undef V
+#undef M
+#undef SOFT_KERNEL
+#undef LOOP_LANES
+#undef soft_v_load
+#undef soft_v_store
+#undef soft_v_splat
+#undef soft_v_gather
+#undef soft_v_scatter
+#undef V_SEL
+#undef V_GT
+#undef V_GE
+#undef V_LT
+#undef V_AND
+#undef V_OR
+#undef V_PICK3
+#undef V_NOT
+#undef V_ANDNOT

@@ -206,6 +206,60 @@ cdef inline void SoftSetTransform(cpBody *body) noexcept nogil:
         s, c, body.p.y - (g.x * s + g.y * c))
 
 
+# -- a profile of the step, stage by stage (benchmarks/soft_profile.py) ---------------
+
+cdef enum:
+    SOFT_STAGE_BROAD_PHASE = 0    # shapes' boxes, the tree's pairs listed
+    SOFT_STAGE_NARROW_PHASE       # contacts of each pair, cached arbiters found
+    SOFT_STAGE_ARBITERS           # arbiters updated or made, begin / pre_solve
+    SOFT_STAGE_COMPONENTS         # contact graph, sleeping, the arbiter cache's filter
+    SOFT_STAGE_PREPARE            # bodies, joints and contacts gathered and prepared
+    SOFT_STAGE_COLOR              # the constraint graph's colours, contacts into lanes
+    SOFT_STAGE_INTEGRATE          # velocities and positions, every substep
+    SOFT_STAGE_WARM_START
+    SOFT_STAGE_SOLVE              # the biased (soft) pass
+    SOFT_STAGE_RELAX              # the relax passes
+    SOFT_STAGE_FINISH             # restitution, impulses stored, bodies written back, post_solve
+    SOFT_STAGE_COUNT
+
+SOFT_STAGE_NAMES = ("broad phase", "narrow phase", "arbiters", "components", "prepare", "color",
+                    "integrate", "warm start", "solve", "relax", "finish")
+
+# Off unless a profile is asked for (a process-wide switch: profile one
+# space at a time). On, each stage costs one clock read.
+cdef bint _profiling = 0
+cdef long long _profile_ns[SOFT_STAGE_COUNT]
+cdef long long _profile_last = 0
+cdef long _profile_steps = 0
+
+cdef inline void SoftProfileMark(int stage) noexcept nogil:
+    # The time since the last mark goes to `stage` (-1: a step begins).
+    global _profile_last, _profile_steps
+    cdef long long now
+    if not _profiling:
+        return
+    now = tamias_now_ns()
+    if stage < 0:
+        _profile_steps += 1
+    else:
+        _profile_ns[stage] += now - _profile_last
+    _profile_last = now
+
+def _profile(on):
+    """Switch the stage profile of soft steps on or off; returns what was
+    collected since the last call, {stage: ms per step}, and resets it."""
+    global _profiling, _profile_steps
+    cdef int i
+    steps = _profile_steps
+    out = {SOFT_STAGE_NAMES[i]: (_profile_ns[i] / 1e6 / steps if steps else 0.0)
+           for i in range(SOFT_STAGE_COUNT)}
+    for i in range(SOFT_STAGE_COUNT):
+        _profile_ns[i] = 0
+    _profile_steps = 0
+    _profiling = bool(on)
+    return out
+
+
 # -- collision: the broad phase, then the narrow phase on the pool ---------------------
 # The chipmunk solver runs the narrow phase of each pair as the broad phase
 # reports it (StageCollide). Here the broad phase first lists the pairs
@@ -284,7 +338,9 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
         # A spatial hash: pair by pair, as the chipmunk solver.
         cpSpatialIndexReindexQuery(space.dynamicShapes, cpSpaceCollideShapes, space)
         return
+    SoftProfileMark(SOFT_STAGE_BROAD_PHASE)
     SoftRun(ctx, SOFT_TASK_NARROW, 0, ctx.candidateCount, 0)
+    SoftProfileMark(SOFT_STAGE_NARROW_PHASE)
     for i in range(ctx.candidateCount):
         # Fetch the arbiter of a pair a few places on (or, for a pair new
         # this step, its slot of the arbiter cache).
@@ -803,24 +859,33 @@ cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, int k, int i) noexcept n
         ln.totalNormal[j][k] = 0.0
         ln.totalTangent[j][k] = 0.0
 
+cdef inline void SoftApplyImpulse(SoftContext *ctx, SoftContact *sc, SoftPoint *sp,
+                                  cpFloat px, cpFloat py) noexcept nogil:
+    # The impulse (px, py) at point sp, on B and against A (slot 0, the
+    # immovable body, is never written: contacts on other threads read it).
+    cdef SoftBody *a = &ctx.bodies[sc.ia]
+    cdef SoftBody *b = &ctx.bodies[sc.ib]
+    cdef SoftState *sa = &ctx.states[sc.ia]
+    cdef SoftState *sb = &ctx.states[sc.ib]
+    if sc.ia != 0:
+        sa.vx -= a.m_inv * px
+        sa.vy -= a.m_inv * py
+        sa.w -= a.i_inv * (sp.rAx * py - sp.rAy * px)
+    if sc.ib != 0:
+        sb.vx += b.m_inv * px
+        sb.vy += b.m_inv * py
+        sb.w += b.i_inv * (sp.rBx * py - sp.rBy * px)
+
 cdef void SoftWarmStart(SoftContext *ctx) noexcept nogil:
     # The coloured contacts lane by lane, then the overflow one by one.
     cdef int i, j
     cdef SoftContact *sc
     cdef SoftPoint *sp
-    cdef SoftBody *a
-    cdef SoftBody *b
-    cdef SoftState *sa
-    cdef SoftState *sb
     cdef cpFloat px, py, nx, ny
     for i in range(SOFT_GRAPH_COLORS):
         SoftRun(ctx, SOFT_TASK_WARM_START, ctx.colorLanes[i], ctx.colorLanes[i + 1], 0)
     for i in range(ctx.overflowCount):
         sc = &ctx.contacts[ctx.overflow[i]]
-        a = &ctx.bodies[sc.ia]
-        b = &ctx.bodies[sc.ib]
-        sa = &ctx.states[sc.ia]
-        sb = &ctx.states[sc.ib]
         nx = sc.nx
         ny = sc.ny
         for j in range(sc.count):
@@ -828,14 +893,7 @@ cdef void SoftWarmStart(SoftContext *ctx) noexcept nogil:
             # P = normalImpulse n + tangentImpulse perp(n)
             px = sp.normalImpulse * nx - sp.tangentImpulse * ny
             py = sp.normalImpulse * ny + sp.tangentImpulse * nx
-            if sc.ia != 0:
-                sa.vx -= a.m_inv * px
-                sa.vy -= a.m_inv * py
-                sa.w -= a.i_inv * (sp.rAx * py - sp.rAy * px)
-            if sc.ib != 0:
-                sb.vx += b.m_inv * px
-                sb.vy += b.m_inv * py
-                sb.w += b.i_inv * (sp.rBx * py - sp.rBy * px)
+            SoftApplyImpulse(ctx, sc, sp, px, py)
 
 cdef void SoftSolve(SoftContext *ctx, bint useBias) noexcept nogil:
     # One Gauss-Seidel pass over the contacts: with useBias the soft,
@@ -1066,18 +1124,14 @@ cdef void SoftApplyRestitution(SoftContext *ctx) noexcept nogil:
     cdef int i, j
     cdef SoftContact *sc
     cdef SoftPoint *sp
-    cdef SoftBody *a
-    cdef SoftBody *b
     cdef SoftState *sa
     cdef SoftState *sb
-    cdef cpFloat nx, ny, e, vn, imp, newImp, px, py
+    cdef cpFloat nx, ny, e, vn, imp, newImp
     for i in range(ctx.contactCount):
         sc = &ctx.contacts[i]
         e = sc.restitution
         if e == 0.0:
             continue
-        a = &ctx.bodies[sc.ia]
-        b = &ctx.bodies[sc.ib]
         sa = &ctx.states[sc.ia]
         sb = &ctx.states[sc.ib]
         nx = sc.nx
@@ -1095,16 +1149,7 @@ cdef void SoftApplyRestitution(SoftContext *ctx) noexcept nogil:
             imp = newImp - sp.normalImpulse
             sp.normalImpulse = newImp
             sp.totalNormal += imp
-            px = imp * nx
-            py = imp * ny
-            if sc.ia != 0:
-                sa.vx -= a.m_inv * px
-                sa.vy -= a.m_inv * py
-                sa.w -= a.i_inv * (sp.rAx * py - sp.rAy * px)
-            if sc.ib != 0:
-                sb.vx += b.m_inv * px
-                sb.vy += b.m_inv * py
-                sb.w += b.i_inv * (sp.rBx * py - sp.rBy * px)
+            SoftApplyImpulse(ctx, sc, sp, imp * nx, imp * ny)
 
 cdef void SoftStoreImpulses(SoftContext *ctx) noexcept nogil:
     # jnAcc / jtAcc hold the impulse of the whole step, as in the chipmunk
@@ -1427,58 +1472,6 @@ cdef int SoftPoolEnsure() except -1:
     return 0
 
 
-# -- a profile of the step, stage by stage (benchmarks/soft_profile.py) ---------------
-
-cdef enum:
-    SOFT_STAGE_COLLIDE = 0        # broad and narrow phase, arbiters, begin / pre_solve
-    SOFT_STAGE_COMPONENTS         # contact graph, sleeping, the arbiter cache's filter
-    SOFT_STAGE_PREPARE            # bodies, joints and contacts gathered and prepared
-    SOFT_STAGE_COLOR              # the constraint graph's colours, contacts into lanes
-    SOFT_STAGE_INTEGRATE          # velocities and positions, every substep
-    SOFT_STAGE_WARM_START
-    SOFT_STAGE_SOLVE              # the biased (soft) pass
-    SOFT_STAGE_RELAX              # the relax passes
-    SOFT_STAGE_FINISH             # restitution, impulses stored, bodies written back, post_solve
-    SOFT_STAGE_COUNT
-
-SOFT_STAGE_NAMES = ("collide", "components", "prepare", "color", "integrate", "warm start",
-                    "solve", "relax", "finish")
-
-# Off unless a profile is asked for (a process-wide switch: profile one
-# space at a time). On, each stage costs one clock read.
-cdef bint _profiling = 0
-cdef long long _profile_ns[SOFT_STAGE_COUNT]
-cdef long long _profile_last = 0
-cdef long _profile_steps = 0
-
-cdef inline void SoftProfileMark(int stage) noexcept nogil:
-    # The time since the last mark goes to `stage` (-1: a step begins).
-    global _profile_last, _profile_steps
-    cdef long long now
-    if not _profiling:
-        return
-    now = tamias_now_ns()
-    if stage < 0:
-        _profile_steps += 1
-    else:
-        _profile_ns[stage] += now - _profile_last
-    _profile_last = now
-
-def _profile(on):
-    """Switch the stage profile of soft steps on or off; returns what was
-    collected since the last call, {stage: ms per step}, and resets it."""
-    global _profiling, _profile_steps
-    cdef int i
-    steps = _profile_steps
-    out = {SOFT_STAGE_NAMES[i]: (_profile_ns[i] / 1e6 / steps if steps else 0.0)
-           for i in range(SOFT_STAGE_COUNT)}
-    for i in range(SOFT_STAGE_COUNT):
-        _profile_ns[i] = 0
-    _profile_steps = 0
-    _profiling = bool(on)
-    return out
-
-
 # -- the step -----------------------------------------------------------------------------
 
 cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
@@ -1530,7 +1523,7 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     SoftCollide(&ctx)
     collided = space.arbiters.num
     cpSpaceUnlock(space, 0)
-    SoftProfileMark(SOFT_STAGE_COLLIDE)
+    SoftProfileMark(SOFT_STAGE_ARBITERS)
 
     cpSpaceProcessComponents(space, dt, collided)
 
