@@ -2,7 +2,7 @@
 
 Runs each scene at the soft solver's defaults on one thread and on two
 (``Space(threaded=True)``, ``threads = 2``) and prints the wall time per
-step of each stage of cpSoftStep (the stage profile of ``_soft_step``, one
+step of each stage of cpSoftStep (the median of --repeats runs) (the stage profile of ``_soft_step``, one
 clock read per stage). Wall time, not instruction counts: the narrow phase
 is bound by memory latency (pointer chasing through the broad phase's pairs,
 the arbiter hash set, shapes and bodies), which instruction counts hide.
@@ -13,6 +13,7 @@ scenes are in docs/benchmarks.md.
 """
 import argparse
 import os
+import statistics
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
@@ -68,18 +69,21 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=120)
     ap.add_argument("--warm", type=int, default=30)
+    ap.add_argument("--repeats", type=int, default=3, help="runs per row; the median of each stage")
     ap.add_argument("--quick", action="store_true", help="a few steps of the small scenes")
     args = ap.parse_args()
     names = list(SCENES)
     if args.quick:
         names = ["pyramid_20", "drum"]
-        args.steps, args.warm = 10, 5
+        args.steps, args.warm, args.repeats = 10, 5, 1
     stages = list(_soft_step.SOFT_STAGE_NAMES)
     print("| scene | threads | " + " | ".join(stages) + " | step ms |")
     print("|---|---|" + "---|" * (len(stages) + 1))
     for name in names:
         for threads in (1, 2):
-            ms = profile(SCENES[name], threads, args.steps, args.warm)
+            runs = [profile(SCENES[name], threads, args.steps, args.warm)
+                    for _ in range(args.repeats)]
+            ms = {s: statistics.median(r[s] for r in runs) for s in stages}
             cells = " | ".join(f"{ms[s]:.3f}" for s in stages)
             print(f"| {name} | {threads} | {cells} | {sum(ms.values()):.3f} |", flush=True)
 
