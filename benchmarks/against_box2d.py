@@ -326,7 +326,7 @@ def fmt(x, spec=".2f", none="-"):
 
 
 def stand_cell(v):
-    return {True: "yes", False: "NO"}.get(v, v) if not isinstance(v, str) else v
+    return "yes" if v is True else "NO" if v is False else v
 
 
 def table(rows):
@@ -366,16 +366,17 @@ def plot(rows, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    names = [r["scene"] for r in rows]
-    xs = range(len(rows))
     fig, ax = plt.subplots(figsize=(8, 4.2))
-    ax.bar([x - 0.2 for x in xs], [r["tamias2d_vs_box2d"] for r in rows], 0.4, label="tamias2d soft / Box2D")
-    ax.bar([x + 0.2 for x in xs], [r["pymunk_vs_box2d"] or 0 for r in rows], 0.4, label="pymunk / Box2D")
+    for shift, key, label in ((-0.2, "tamias2d_vs_box2d", "tamias2d soft / Box2D"),
+                              (0.2, "pymunk_vs_box2d", "pymunk 7.3 / Box2D")):
+        xs = [i + shift for i, r in enumerate(rows) if r[key] is not None]
+        ys = [r[key] for r in rows if r[key] is not None]
+        bars = ax.bar(xs, ys, 0.4, label=label)
+        ax.bar_label(bars, fmt="%.1fx", fontsize=8)
     ax.axhline(1.0, color="k", lw=0.8)
-    ax.set_xticks(list(xs), names)
-    ax.set_ylabel("time per step relative to Box2D v3 (1 thread)")
-    ax.set_yscale("log")
-    ax.set_title("Against Box2D v3 (median ms/step ratio; lower is faster)")
+    ax.set_xticks(range(len(rows)), [f"{r['scene']}\n{r['bodies']:,} bodies" for r in rows])
+    ax.set_ylabel("time per step / Box2D v3's (1 thread)")
+    ax.set_title("Against Box2D v3: median time per step relative to Box2D (lower is faster)")
     ax.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=110)
