@@ -57,6 +57,7 @@ DT = 1.0 / 60.0
 GRAVITY = -10.0
 FRICTION = 0.6
 SLOP = 0.005  # Box2D's linear slop, metres
+COMPARED = ("box2d", "tamias2d", "pymunk")
 
 
 class Box2DEngine:
@@ -303,7 +304,7 @@ def run_scene(name, quick, pymunk_too, threads_too, log):
             log(f"{name}: {done}/{steps} steps")
     ms = {label: statistics.median(t) for label, t in times.items()}
     judged = {label: judge(engines[label], scenes[label], homes[label])
-              for label in ("box2d", "tamias2d", "pymunk") if label in engines}
+              for label in COMPARED if label in engines}
     row = {"scene": name, "bodies": len(scenes["box2d"]["bodies"]), "steps": steps,
            "warmup_steps": warm, "chunk_steps": chunk,
            "box2d_ms": ms["box2d"], "tamias2d_ms": ms["tamias2d"], "pymunk_ms": ms.get("pymunk"),
@@ -336,7 +337,7 @@ def table(rows):
              "|---|---:|---:|---:|---:|---:|---:|---|---:|---:|"]
     for r in rows:
         st = r["stands"]
-        stands = ", ".join(stand_cell(st[k]) if k in st else "-" for k in ("box2d", "tamias2d", "pymunk"))
+        stands = ", ".join(stand_cell(st[k]) if k in st else "-" for k in COMPARED)
         lines.append(f"| {r['scene']} | {r['bodies']:,} | {fmt(r['box2d_ms'])} | {fmt(r['tamias2d_ms'])} "
                      f"| {fmt(r['pymunk_ms'])} | {fmt(r['tamias2d_vs_box2d'], '.1f')}x "
                      f"| {fmt(r['pymunk_vs_box2d'], '.1f')}{'x' if r['pymunk_vs_box2d'] else ''} "
@@ -348,7 +349,7 @@ def table(rows):
         d = r["stands_detail"]
         if "sink" not in d.get("box2d", {}):
             continue
-        cell = [", ".join(fmt(d[k].get(q), ".3f") if k in d else "-" for k in ("box2d", "tamias2d", "pymunk"))
+        cell = [", ".join(fmt(d[k].get(q), ".3f") if k in d else "-" for k in COMPARED)
                 for q in ("sideways", "sink")]
         lines.append(f"| {r['scene']} | {cell[0]} | {cell[1]} |")
     return "\n".join(lines)
@@ -403,13 +404,14 @@ def main(argv=None):
     def log(msg):
         print(f"[{time.perf_counter() - start:6.1f} s] {msg}", file=sys.stderr, flush=True)
     start = time.perf_counter()
-    load_start = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
+    load = os.getloadavg if hasattr(os, "getloadavg") else (lambda: (None,))
+    load_start = load()[0]
     rows = [run_scene(n, args.quick, n not in skip, not args.no_threads, log) for n in names]
     result = {"meta": {"quick": args.quick, "dt": DT, "box2d_substeps": 4,
                        "tamias2d_substeps": 4, "pymunk_iterations": 10, "collision_slop": SLOP,
                        "tamias2d": tamias2d.version, "pymunk": pymunk.version,
-                       "pyb2d3": importlib.metadata.version("pyb2d3"), "cpu": cpu_name(), "logical_cpus": os.cpu_count(),
-                       "load_1min_start_end": [load_start, os.getloadavg()[0] if load_start is not None else None],
+                       "pyb2d3": importlib.metadata.version("pyb2d3"), "cpu": cpu_name(),
+                       "logical_cpus": os.cpu_count(), "load_1min_start_end": [load_start, load()[0]],
                        "duration_s": time.perf_counter() - start},
               "scenes": rows}
     if args.json != "-":
