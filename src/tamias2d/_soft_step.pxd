@@ -3,22 +3,30 @@
 # stages (collision, arbiter cache, components and sleeping, callbacks) are
 # _space_step's.
 #
-# cpSoftStep is a pipeline, in this order:
-#   StageResetArbiters, StageCollide (speculative margin),
-#   cpSpaceProcessComponents, StageFilterArbiterCache   (shared)
-#   SoftGatherBodies        awake bodies into a contiguous SoftBody array
+# cpSoftStep is a pipeline, in this order (* : on the pool of a threaded
+# space, see "threads within one step" in _soft_step.pyx):
+#   StageResetArbiters                                      (shared)
+#   SoftCollide             broad phase lists the pairs (speculative margin,
+#                           cheap rejection); * narrow phase and the lookup
+#                           of cached arbiters; arbiters and begin /
+#                           pre_solve callbacks in the broad phase's order
+#   cpSpaceProcessComponents, StageFilterArbiterCache       (shared)
+#   SoftGatherBodies        awake bodies into SoftBody / SoftState arrays
 #   SoftPrepareJoints       joint pre-solve callbacks, warm-start rescale
-#   SoftPrepareContacts     arbiters into a contiguous SoftContact array;
+#   SoftPrepareContacts     * arbiters into a contiguous SoftContact array;
 #                           each point's softness for its load
 #                           (SoftPointSoftness), the 2x2 block matrices
-#   per substep (h = dt / substeps):
-#     SoftIntegrateVelocities  gravity, damping, forces, velocity_func
-#     SoftWarmStart            last substep's impulses (joints, contacts)
-#     SoftSolve(useBias=1)     soft contacts (normal rows only), joints
-#     SoftIntegratePositions   position_func, delta position / rotation
+#   SoftColorContacts       the constraint graph's colours; each colour's
+#                           contacts into SoftLanes (_soft_lanes.h)
+#   per substep (h = dt / substeps), colour by colour for the contacts:
+#     SoftIntegrateVelocities  * gravity, damping, forces, velocity_func
+#     SoftWarmStart            last substep's impulses (joints, * contacts)
+#     SoftSolve(useBias=1)     joints, * soft contacts (normal rows only)
+#     SoftIntegratePositions   * position_func, delta position / rotation
 #     SoftRelax x2             SoftSolve without bias (rigid), with friction
-#   SoftApplyRestitution, SoftStoreImpulses, SoftFinishBodies
-#   StagePostSolve, unlock (post-step callbacks)              (shared)
+#   * SoftUnpackLanes, SoftApplyRestitution, * SoftStoreImpulses,
+#   * SoftFinishBodies, SoftFinishJoints
+#   StagePostSolve, unlock (post-step callbacks)            (shared)
 from tamias2d._config cimport cpFloat, cpBool
 from tamias2d._structs cimport cpSpace, cpBody, cpArbiter, cpSoftSettings, cpSoftScratch
 from tamias2d.vector cimport cpVect

@@ -1096,14 +1096,14 @@ cdef void SoftAccumulateLanes(SoftContext *ctx, int begin, int end) noexcept nog
                 ln.totalNormal[j][k] += ln.normalImpulse[j][k]
                 ln.totalTangent[j][k] += ln.tangentImpulse[j][k]
 
-cdef void SoftUnpackLanes(SoftContext *ctx) noexcept nogil:
+cdef void SoftUnpackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
     # The lanes' impulses back into their SoftContacts (restitution and the
     # arbiters read them there).
     cdef int i, j, k
     cdef SoftLanes *ln
     cdef SoftContact *sc
     cdef SoftPoint *sp
-    for i in range(ctx.colorLanes[SOFT_GRAPH_COLORS]):
+    for i in range(begin, end):
         ln = &ctx.lanes[i]
         for k in range(SOFT_LANES):
             if ln.src[k] < 0:
@@ -1151,14 +1151,14 @@ cdef void SoftApplyRestitution(SoftContext *ctx) noexcept nogil:
             sp.totalNormal += imp
             SoftApplyImpulse(ctx, sc, sp, imp * nx, imp * ny)
 
-cdef void SoftStoreImpulses(SoftContext *ctx) noexcept nogil:
+cdef void SoftStoreImpulses(SoftContext *ctx, int begin, int end) noexcept nogil:
     # jnAcc / jtAcc hold the impulse of the whole step, as in the chipmunk
     # solver: Arbiter.total_impulse reads them, and the next step warm-starts
     # each substep with (h / dt) of them.
     cdef int i, j
     cdef SoftContact *sc
     cdef cpContact *con
-    for i in range(ctx.contactCount):
+    for i in range(begin, end):
         sc = &ctx.contacts[i]
         for j in range(sc.count):
             con = &sc.arb.contacts[j]
@@ -1252,12 +1252,12 @@ cdef void SoftIntegratePositions(SoftContext *ctx, int begin, int end) noexcept 
             # The joints' preStep reads the transform.
             SoftSetTransform(body)
 
-cdef void SoftFinishBodies(SoftContext *ctx) noexcept nogil:
+cdef void SoftFinishBodies(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef int i
     cdef SoftBody *sb
     cdef SoftState *st
     cdef cpBody *body
-    for i in range(1, ctx.bodyCount):
+    for i in range(begin, end):
         sb = &ctx.bodies[i]
         st = &ctx.states[i]
         body = sb.body
@@ -1290,6 +1290,9 @@ cdef enum:
     SOFT_TASK_ACCUMULATE
     SOFT_TASK_PREPARE
     SOFT_TASK_NARROW
+    SOFT_TASK_UNPACK
+    SOFT_TASK_STORE
+    SOFT_TASK_FINISH_BODIES
 
 cdef enum:
     SOFT_CHUNK_LANES = 32         # lanes of contacts per chunk
@@ -1337,6 +1340,12 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
         SoftPrepareContactRange(ctx, begin, end)
     elif task == SOFT_TASK_NARROW:
         SoftNarrowPhase(ctx, begin, end)
+    elif task == SOFT_TASK_UNPACK:
+        SoftUnpackLanes(ctx, begin, end)
+    elif task == SOFT_TASK_STORE:
+        SoftStoreImpulses(ctx, begin, end)
+    elif task == SOFT_TASK_FINISH_BODIES:
+        SoftFinishBodies(ctx, begin, end)
 
 cdef void SoftTakeChunks(bint caller) noexcept nogil:
     # The caller takes chunks from the front, the worker from the back: in
@@ -1363,9 +1372,9 @@ cdef void SoftRun(SoftContext *ctx, int task, int begin, int end, bint flag) noe
     # One stage over [begin, end): on the pool when the space is threaded
     # and the stage is big enough to share, else here.
     cdef int chunk = SOFT_CHUNK_LANES
-    if task <= SOFT_TASK_INTEGRATE_POSITIONS:
+    if task <= SOFT_TASK_INTEGRATE_POSITIONS or task == SOFT_TASK_FINISH_BODIES:
         chunk = SOFT_CHUNK_BODIES
-    elif task == SOFT_TASK_PREPARE:
+    elif task == SOFT_TASK_PREPARE or task == SOFT_TASK_STORE:
         chunk = SOFT_CHUNK_CONTACTS
     elif task == SOFT_TASK_NARROW:
         chunk = SOFT_CHUNK_PAIRS
@@ -1552,10 +1561,10 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
                 SoftRelax(&ctx)
             SoftAccumulate(&ctx)
             SoftProfileMark(SOFT_STAGE_RELAX)
-        SoftUnpackLanes(&ctx)
+        SoftRun(&ctx, SOFT_TASK_UNPACK, 0, ctx.colorLanes[SOFT_GRAPH_COLORS], 0)
         SoftApplyRestitution(&ctx)
-        SoftStoreImpulses(&ctx)
-        SoftFinishBodies(&ctx)
+        SoftRun(&ctx, SOFT_TASK_STORE, 0, ctx.contactCount, 0)
+        SoftRun(&ctx, SOFT_TASK_FINISH_BODIES, 1, ctx.bodyCount, 0)
         SoftFinishJoints(&ctx)
     if ctx.threaded:
         SoftPoolRelease()
