@@ -1275,12 +1275,14 @@ cdef void SoftFinishBodies(SoftContext *ctx, int begin, int end) noexcept nogil:
 # -- threads within one step ---------------------------------------------------------
 # A threaded space (Space(threaded=True), threads = 2) runs the body and
 # contact stages of its soft step on the calling thread and a worker. A
-# stage is a range cut into chunks that the threads take from a shared
-# counter; the chunks of a stage are independent (contacts of one colour
-# share no movable body, and each body integrates alone), so the result is
+# stage is a range cut into chunks, which the caller takes from the front
+# and the worker from the back; the chunks of a stage are independent
+# (contacts of one colour share no movable body, each body integrates alone,
+# each pair's narrow phase writes only its own results), so the result is
 # the same bits whoever runs which chunk, and the same as on one thread. The
 # caller never waits for a worker that has not come (a busy machine): it
-# takes every chunk the worker does not.
+# takes every chunk the worker does not. A stage costs two cache-line trips
+# between the cores, so steps under SOFT_THREADED_MIN_CONTACTS stay serial.
 
 cdef enum:
     SOFT_TASK_INTEGRATE_VELOCITIES = 0
@@ -1298,7 +1300,7 @@ cdef enum:
     SOFT_CHUNK_LANES = 32         # lanes of contacts per chunk
     SOFT_CHUNK_BODIES = 128
     SOFT_WORKER_SPIN = 1 << 16    # pauses a worker polls for the next stage before it sleeps
-    SOFT_THREADED_MIN_CONTACTS = 2048
+    SOFT_THREADED_MIN_CONTACTS = 2048   # last step's arbiters
     SOFT_CHUNK_CONTACTS = 64      # contacts prepared per chunk
     SOFT_CHUNK_PAIRS = 64         # pairs of the narrow phase per chunk
 
