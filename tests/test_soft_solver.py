@@ -568,19 +568,31 @@ def _state_after(build, steps):
 @pytest.mark.parametrize("scene", ["pyramid", "rain", "drum", "mixed"])
 def test_vector_and_scalar_kernels_give_the_same_bits(scene):
     # The scalar path is what a compiler without vector extensions builds
-    # (MSVC); it must be the same solver, not a near one.
+    # (MSVC), the AVX2 one what a CPU with AVX2 runs: each must be the same
+    # solver, not a near one.
     import scenes
     from tamias2d import _soft_step
-    if not _soft_step._lanes_have_simd():
+    paths = _soft_step._lanes_paths()
+    assert paths[0] == "scalar"
+    if len(paths) == 1:
         pytest.skip("this build has only the scalar kernels")
     build = lambda: getattr(scenes, scene)(tamias2d)
+    chosen = _soft_step._lanes_path()
+    assert chosen == paths[-1]          # the widest is the default
+    states = {}
     try:
-        _soft_step._lanes_use_scalar(False)
-        vector = _state_after(build, 120)
-        assert _soft_step._lanes_use_scalar(True)
-        scalar = _state_after(build, 120)
+        for path in paths:
+            assert _soft_step._lanes_path(path) == path
+            states[path] = _state_after(build, 120)
     finally:
-        _soft_step._lanes_use_scalar(False)
-    assert len(vector) == len(scalar)
-    for i, (v, s) in enumerate(zip(vector, scalar)):
-        assert repr(v) == repr(s), f"body {i}: {v} != {s}"
+        _soft_step._lanes_path(chosen)
+    for path in paths[1:]:
+        assert len(states[path]) == len(states["scalar"])
+        for i, (v, s) in enumerate(zip(states[path], states["scalar"])):
+            assert repr(v) == repr(s), f"{path}, body {i}: {v} != {s}"
+
+
+def test_an_unknown_kernel_path_is_refused():
+    from tamias2d import _soft_step
+    with pytest.raises(ValueError, match="no contact-kernel path"):
+        _soft_step._lanes_path("sse9")

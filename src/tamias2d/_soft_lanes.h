@@ -6,15 +6,18 @@
  * at once. It is Box2D v3's contact_solver.c idea (b2ContactConstraintSIMD),
  * in double precision and with this solver's two-point block solve.
  *
- * Each kernel is written once over a type `V` and instantiated twice:
- *   - with GCC / Clang vector extensions (`V` is two doubles: SSE2 on
- *     x86-64, NEON on arm64, both part of the base architecture, so no
- *     -march flag is needed), as soft_*_simd;
+ * Each kernel is written once over a type `V` and instantiated three times:
+ *   - with GCC / Clang vector extensions, `V` two doubles (SSE2 on x86-64,
+ *     NEON on arm64, both part of the base architecture, so no -march flag
+ *     is needed), two passes over a SoftLanes, as soft_*_simd;
+ *   - with GCC on x86-64, `V` four doubles compiled for AVX2 (a function
+ *     target, chosen at run time where the CPU has it), as soft_*_avx2;
  *   - with `V` a plain double, looping over the lanes, as soft_*_scalar (the
- *     path on compilers without vector extensions, and a check of the other).
- * Both do the same IEEE operations in the same order (no fused multiply-add:
- * the build passes -ffp-contract=off; branches become selects in both), so
- * they give the same bits, which tests/test_soft_solver.py checks.
+ *     path on compilers without vector extensions, and a check of the others).
+ * All do the same IEEE operations in the same order (no fused multiply-add:
+ * the build passes -ffp-contract=off and the AVX2 target does not include
+ * FMA; branches become selects), so they give the same bits, which
+ * tests/test_soft_solver.py checks.
  */
 #ifndef TAMIAS_SOFT_LANES_H
 #define TAMIAS_SOFT_LANES_H
@@ -22,7 +25,7 @@
 #include <stddef.h>
 #include <string.h>
 
-#define SOFT_LANES 2
+#define SOFT_LANES 4
 
 /* The solver state of one body (Box2D's b2BodyState): velocity and the
  * motion since the step began. Slot 0 is the immovable body (all zero,
@@ -86,31 +89,11 @@ static inline void SoftLanesClear(SoftLanes *c, int k) {
 
 #endif /* TAMIAS_SOFT_LANES_H */
 
-/* -- the kernels, instantiated twice ------------------------------------------- */
+/* -- the kernels, instantiated three times ------------------------------------ */
 
 #if defined(__GNUC__) || defined(__clang__)
 #define SOFT_HAVE_SIMD 1
-typedef double SoftV2 __attribute__((vector_size(16)));
-typedef long long SoftM2 __attribute__((vector_size(16)));
-
-#define V SoftV2
-#define M SoftM2
-#define SOFT_KERNEL(name) name##_simd
-#define LOOP_LANES(k) for (k = 0; k < 1; k++)
-static inline V soft_v_load(const double *p, int k) { V v; (void)k; memcpy(&v, p, sizeof(v)); return v; }
-static inline void soft_v_store(double *p, int k, V v) { (void)k; memcpy(p, &v, sizeof(v)); }
-static inline V soft_v_splat(double s) { V v = {s, s}; return v; }
-static inline V soft_v_gather(const SoftState *st, const int *idx, int k, size_t off) {
-    V v; (void)k;
-    v[0] = *(const double *)((const char *)&st[idx[0]] + off);
-    v[1] = *(const double *)((const char *)&st[idx[1]] + off);
-    return v;
-}
-static inline void soft_v_scatter(SoftState *st, const int *idx, const int *w, int k, size_t off, V v) {
-    (void)k;
-    if (w[0]) *(double *)((char *)&st[idx[0]] + off) = v[0];
-    if (w[1]) *(double *)((char *)&st[idx[1]] + off) = v[1];
-}
+/* Vector comparisons, selects and masks, for either vector width. */
 #define V_SEL(m, a, b) ((V)(((M)(a) & (m)) | ((M)(b) & ~(m))))
 #define V_GT(a, b) ((M)((a) > (b)))
 #define V_GE(a, b) ((M)((a) >= (b)))
@@ -121,11 +104,90 @@ static inline void soft_v_scatter(SoftState *st, const int *idx, const int *w, i
 #define V_NOT(m) (~(m))
 /* Of three exclusive masks, the value of the one that is set, else +0.0. */
 #define V_PICK3(m1, a, m2, b, m3, c) ((V)(((M)(a) & (m1)) | ((M)(b) & (m2)) | ((M)(c) & (m3))))
+
+/* Two doubles: SSE2 on x86-64, NEON on arm64 (the base instruction sets). */
+typedef double SoftV2 __attribute__((vector_size(16)));
+typedef long long SoftM2 __attribute__((vector_size(16)));
+#define V SoftV2
+#define M SoftM2
+#define SOFT_KERNEL(name) name##_simd
+#define LOOP_LANES(k) for (k = 0; k < SOFT_LANES; k += 2)
+static inline SoftV2 soft_v2_load(const double *p, int k) { SoftV2 v; memcpy(&v, p + k, sizeof(v)); return v; }
+static inline void soft_v2_store(double *p, int k, SoftV2 v) { memcpy(p + k, &v, sizeof(v)); }
+static inline SoftV2 soft_v2_splat(double s) { SoftV2 v = {s, s}; return v; }
+static inline SoftV2 soft_v2_gather(const SoftState *st, const int *idx, int k, size_t off) {
+    SoftV2 v;
+    v[0] = *(const double *)((const char *)&st[idx[k]] + off);
+    v[1] = *(const double *)((const char *)&st[idx[k + 1]] + off);
+    return v;
+}
+static inline void soft_v2_scatter(SoftState *st, const int *idx, const int *w, int k, size_t off, SoftV2 v) {
+    if (w[k]) *(double *)((char *)&st[idx[k]] + off) = v[0];
+    if (w[k + 1]) *(double *)((char *)&st[idx[k + 1]] + off) = v[1];
+}
+#define soft_v_load soft_v2_load
+#define soft_v_store soft_v2_store
+#define soft_v_splat soft_v2_splat
+#define soft_v_gather soft_v2_gather
+#define soft_v_scatter soft_v2_scatter
 #include "_soft_lanes_kernels.h"
+
+/* Four doubles with AVX2, chosen at run time where the CPU has it (a wheel
+ * cannot assume it). GCC only; other compilers keep the two-double path. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define SOFT_HAVE_AVX2 1
+#pragma GCC push_options
+#pragma GCC target("avx2")
+typedef double SoftV4 __attribute__((vector_size(32)));
+typedef long long SoftM4 __attribute__((vector_size(32)));
+#define V SoftV4
+#define M SoftM4
+#define SOFT_KERNEL(name) name##_avx2
+#define LOOP_LANES(k) for (k = 0; k < 1; k++)
+static inline SoftV4 soft_v4_load(const double *p, int k) { SoftV4 v; (void)k; memcpy(&v, p, sizeof(v)); return v; }
+static inline void soft_v4_store(double *p, int k, SoftV4 v) { (void)k; memcpy(p, &v, sizeof(v)); }
+static inline SoftV4 soft_v4_splat(double s) { SoftV4 v = {s, s, s, s}; return v; }
+static inline SoftV4 soft_v4_gather(const SoftState *st, const int *idx, int k, size_t off) {
+    SoftV4 v;
+    int j;
+    (void)k;
+    for (j = 0; j < 4; j++)
+        v[j] = *(const double *)((const char *)&st[idx[j]] + off);
+    return v;
+}
+static inline void soft_v4_scatter(SoftState *st, const int *idx, const int *w, int k, size_t off, SoftV4 v) {
+    int j;
+    (void)k;
+    for (j = 0; j < 4; j++)
+        if (w[j]) *(double *)((char *)&st[idx[j]] + off) = v[j];
+}
+#define soft_v_load soft_v4_load
+#define soft_v_store soft_v4_store
+#define soft_v_splat soft_v4_splat
+#define soft_v_gather soft_v4_gather
+#define soft_v_scatter soft_v4_scatter
+#include "_soft_lanes_kernels.h"
+#pragma GCC pop_options
 #else
-#define SOFT_HAVE_SIMD 0
+#define SOFT_HAVE_AVX2 0
 #endif
 
+#undef V_SEL
+#undef V_GT
+#undef V_GE
+#undef V_LT
+#undef V_AND
+#undef V_OR
+#undef V_ANDNOT
+#undef V_NOT
+#undef V_PICK3
+#else
+#define SOFT_HAVE_SIMD 0
+#define SOFT_HAVE_AVX2 0
+#endif
+
+/* One double, lane by lane: what a compiler without vector extensions
+ * builds, and the check of the others. */
 #define V double
 #define M int
 #define SOFT_KERNEL(name) name##_scalar
@@ -154,25 +216,66 @@ static inline void soft_s_scatter(SoftState *st, const int *idx, const int *w, i
 #define V_NOT(m) (!(m))
 #define V_PICK3(m1, a, m2, b, m3, c) ((m1) ? (a) : (m2) ? (b) : (m3) ? (c) : 0.0)
 #include "_soft_lanes_kernels.h"
+#undef V_SEL
+#undef V_GT
+#undef V_GE
+#undef V_LT
+#undef V_AND
+#undef V_OR
+#undef V_ANDNOT
+#undef V_NOT
+#undef V_PICK3
 
-/* The path the solver takes: the vector kernels where the compiler has
- * them, unless soft_lanes_use_scalar is set (a test switch). */
-static int soft_lanes_use_scalar = 0;
+/* The path the solver takes (SOFT_PATH_*): the widest this build and this
+ * CPU have, chosen once at import (SoftLanesInit); a test switch sets
+ * another. All three give the same bits. */
+enum { SOFT_PATH_SCALAR = 0, SOFT_PATH_SIMD = 1, SOFT_PATH_AVX2 = 2 };
+static int soft_lanes_path = SOFT_PATH_SCALAR;
+
+static inline int SoftLanesPathAvailable(int path) {
+    if (path == SOFT_PATH_SCALAR)
+        return 1;
+    if (path == SOFT_PATH_SIMD)
+        return SOFT_HAVE_SIMD;
+#if SOFT_HAVE_AVX2
+    if (path == SOFT_PATH_AVX2) {
+        __builtin_cpu_init();
+        return __builtin_cpu_supports("avx2") ? 1 : 0;
+    }
+#endif
+    return 0;
+}
+
+static inline void SoftLanesInit(void) {
+    soft_lanes_path = SoftLanesPathAvailable(SOFT_PATH_AVX2) ? SOFT_PATH_AVX2
+                    : SoftLanesPathAvailable(SOFT_PATH_SIMD) ? SOFT_PATH_SIMD : SOFT_PATH_SCALAR;
+}
+
+static inline int SoftLanesGetPath(void) { return soft_lanes_path; }
+
+static inline int SoftLanesSetPath(int path) {
+    if (!SoftLanesPathAvailable(path))
+        return 0;
+    soft_lanes_path = path;
+    return 1;
+}
 
 static inline void SoftLanesWarmStart(SoftLanes *c, SoftState *st) {
+#if SOFT_HAVE_AVX2
+    if (soft_lanes_path == SOFT_PATH_AVX2) { soft_warm_start_avx2(c, st); return; }
+#endif
 #if SOFT_HAVE_SIMD
-    if (!soft_lanes_use_scalar) { soft_warm_start_simd(c, st); return; }
+    if (soft_lanes_path == SOFT_PATH_SIMD) { soft_warm_start_simd(c, st); return; }
 #endif
     soft_warm_start_scalar(c, st);
 }
 
 static inline void SoftLanesSolve(SoftLanes *c, SoftState *st, double inv_h, double pushOut, int useBias) {
+#if SOFT_HAVE_AVX2
+    if (soft_lanes_path == SOFT_PATH_AVX2) { soft_solve_avx2(c, st, inv_h, pushOut, useBias); return; }
+#endif
 #if SOFT_HAVE_SIMD
-    if (!soft_lanes_use_scalar) { soft_solve_simd(c, st, inv_h, pushOut, useBias); return; }
+    if (soft_lanes_path == SOFT_PATH_SIMD) { soft_solve_simd(c, st, inv_h, pushOut, useBias); return; }
 #endif
     soft_solve_scalar(c, st, inv_h, pushOut, useBias);
 }
-
-static inline int SoftLanesHaveSimd(void) { return SOFT_HAVE_SIMD; }
-static inline void SoftLanesSetScalar(int on) { soft_lanes_use_scalar = on; }
-static inline int SoftLanesScalar(void) { return soft_lanes_use_scalar || !SOFT_HAVE_SIMD; }

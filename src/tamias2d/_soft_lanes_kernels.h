@@ -1,8 +1,8 @@
 /* The contact kernels of the soft solver over SoftLanes, written once over
- * the lane type V (mask type M). Included twice by _soft_lanes.h, which
- * defines V, M, SOFT_KERNEL, LOOP_LANES, the soft_v_* accessors and the V_*
- * comparisons and selects (undefined again at the end of this file); no
- * include guard on purpose.
+ * the lane type V (mask type M). Included by _soft_lanes.h, which
+ * defines V, M, SOFT_KERNEL, LOOP_LANES, the soft_v_* accessors (undefined
+ * again at the end of this file) and the V_* comparisons and selects; no
+ * include guard on purpose. Included three times (see there).
  *
  * Same arithmetic as SoftSolve in _soft_step.pyx (the scalar solver of the
  * contacts that are not packed into lanes); see there for the why. */
@@ -167,7 +167,8 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
 #undef G
 #undef P
 
-/* The instantiation's macros, for the next one. */
+/* The instantiation's type and accessor macros, for the next one (the V_*
+ * operations are _soft_lanes.h's to undefine). */
 #undef V
 #undef M
 #undef SOFT_KERNEL
@@ -177,12 +178,3 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
 #undef soft_v_splat
 #undef soft_v_gather
 #undef soft_v_scatter
-#undef V_SEL
-#undef V_GT
-#undef V_GE
-#undef V_LT
-#undef V_AND
-#undef V_OR
-#undef V_PICK3
-#undef V_NOT
-#undef V_ANDNOT

@@ -121,9 +121,11 @@ cdef extern from "_soft_lanes.h" nogil:
     void SoftLanesClear(SoftLanes *c, int k)
     void SoftLanesWarmStart(SoftLanes *c, SoftState *st)
     void SoftLanesSolve(SoftLanes *c, SoftState *st, cpFloat inv_h, cpFloat pushOut, int useBias)
-    int SoftLanesHaveSimd()
-    void SoftLanesSetScalar(int on)
-    int SoftLanesScalar()
+    enum: SOFT_PATH_SCALAR, SOFT_PATH_SIMD, SOFT_PATH_AVX2
+    void SoftLanesInit()
+    int SoftLanesPathAvailable(int path)
+    int SoftLanesGetPath()
+    int SoftLanesSetPath(int path)
 
 # One awake body during a soft step, beside its SoftState (same slot). Slot
 # 0 stands for every body the step does not move (static, sleeping,

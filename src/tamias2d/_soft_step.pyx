@@ -1578,17 +1578,25 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
 
 # -- test switches -------------------------------------------------------------------------
 
-def _lanes_use_scalar(on=None):
-    """Whether the contact kernels run their scalar path (and, given `on`,
-    set it first). The scalar path is what a compiler without vector
-    extensions builds; tests check that both paths give the same bits."""
-    if on is not None:
-        SoftLanesSetScalar(1 if on else 0)
-    return bool(SoftLanesScalar())
+_LANE_PATHS = {"scalar": SOFT_PATH_SCALAR, "simd": SOFT_PATH_SIMD, "avx2": SOFT_PATH_AVX2}
 
-def _lanes_have_simd():
-    """Whether this build has the vector path of the contact kernels."""
-    return bool(SoftLanesHaveSimd())
+# The widest kernels this build and this CPU have.
+SoftLanesInit()
+
+def _lanes_paths():
+    """The contact-kernel paths this build has on this CPU: "scalar" (what
+    a compiler without vector extensions builds), "simd" (two doubles:
+    SSE2 or NEON) and "avx2" (four doubles, x86-64 CPUs with AVX2)."""
+    return tuple(name for name, path in _LANE_PATHS.items() if SoftLanesPathAvailable(path))
+
+def _lanes_path(name=None):
+    """The path the contact kernels take (and, given `name`, set it first;
+    for tests, which check that all paths give the same bits)."""
+    if name is not None:
+        if name not in _LANE_PATHS or not SoftLanesSetPath(_LANE_PATHS[name]):
+            raise ValueError(f"no contact-kernel path {name!r} here; there are {_lanes_paths()}")
+    current = SoftLanesGetPath()
+    return next(n for n, p in _LANE_PATHS.items() if p == current)
 
 def _pool_state():
     """The soft solver's thread pool: (workers started, stages handed out)."""
