@@ -596,3 +596,64 @@ def test_an_unknown_kernel_path_is_refused():
     from tamias2d import _soft_step
     with pytest.raises(ValueError, match="no contact-kernel path"):
         _soft_step._lanes_path("sse9")
+
+
+# -- the broad phase's arbiter guesses --------------------------------------------------
+
+def _sleepy_pile():
+    # Boxes that fall asleep, are woken by a late box and fall asleep again:
+    # arbiters leave the cache for the sleeping components and come back.
+    s = tamias2d.Space()
+    s.gravity = 0, -900
+    s.sleep_time_threshold = 0.3
+    ground = tamias2d.Segment(s.static_body, (-300, 0), (300, 0), 2)
+    ground.friction = 0.8
+    s.add(ground)
+    for i in range(12):
+        b = tamias2d.Body(1, tamias2d.moment_for_box(1, (20, 20)))
+        b.position = -150 + 26 * i, 11 + (i % 3) * 21
+        box = tamias2d.Poly.create_box(b, (20, 20))
+        box.friction = 0.8
+        s.add(b, box)
+
+    def hook(i):
+        if i == 90:
+            b = tamias2d.Body(5, tamias2d.moment_for_box(5, (20, 20)))
+            b.position = -100, 200
+            s.add(b, tamias2d.Poly.create_box(b, (20, 20)))
+    s.scene_hook = hook
+    return s
+
+
+def _short_memory_rain(persistence):
+    # Persistence 1: an arbiter goes back to the pool the step its pair
+    # separates, and is soon another pair's, while the pairs live on; at 0,
+    # the step it was used in, its shapes still set.
+    import scenes
+    s = scenes.rain(tamias2d, count=200)
+    s.collision_persistence = persistence
+    return s
+
+
+@pytest.mark.parametrize("scene", ["add_remove", "type_changes", "sleepy_pile",
+                                   "rain_persistence_1", "rain_persistence_0"])
+def test_arbiter_guesses_change_nothing(scene):
+    # The broad phase remembers each pair's arbiter so that the narrow phase
+    # need not look it up; a guess gone stale (arbiter pooled and reused,
+    # shapes removed, bodies asleep) must be caught, never used.
+    import scenes
+    from tamias2d import _soft_step
+    builds = {"sleepy_pile": _sleepy_pile,
+              "rain_persistence_1": lambda: _short_memory_rain(1),
+              "rain_persistence_0": lambda: _short_memory_rain(0)}
+    build = builds.get(scene) or (lambda: getattr(scenes, scene)(tamias2d))
+    assert _soft_step._arbiter_guesses()
+    try:
+        _soft_step._arbiter_guesses(False)
+        without = _state_after(build, 240)
+    finally:
+        _soft_step._arbiter_guesses(True)
+    with_guesses = _state_after(build, 240)
+    assert len(with_guesses) == len(without)
+    for i, (g, w) in enumerate(zip(with_guesses, without)):
+        assert repr(g) == repr(w), f"body {i}: {g} != {w}"

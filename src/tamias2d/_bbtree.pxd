@@ -57,13 +57,20 @@ cdef struct Thread:
     Node *leaf
     Pair *next
 
+# What a pair of leaves remembers for the narrow phase between steps.
+cdef struct cpPairSlot:
+    cpCollisionID id                 # narrow-phase cache, handed back on replay
+    # The soft solver's guess at the pair's cached arbiter, checked before
+    # use (saves it the arbiter cache's lookup); unused by the chipmunk path.
+    void *arbiter
+
 cdef struct Pair:
     Thread a
     Thread b
-    cpCollisionID id                 # narrow-phase cache, handed back on replay
+    cpPairSlot slot
 
-# A pair reported with where the tree keeps its id (NULL: not kept).
-ctypedef void (*cpBBTreeSlotFunc)(void *obj1, void *obj2, cpCollisionID *slot, void *data) noexcept nogil
+# A pair reported with where the tree keeps its slot (NULL: not kept).
+ctypedef void (*cpBBTreeSlotFunc)(void *obj1, void *obj2, cpPairSlot *slot, void *data) noexcept nogil
 
 # -- cpBBTree.c -----------------------------------------------------------------------
 cdef cpBBTree *cpBBTreeAlloc() noexcept nogil

@@ -206,7 +206,8 @@ cdef void PairInsert(Node *a, Node *b, cpBBTree *tree) noexcept nogil:
     pair.b.prev = NULL
     pair.b.leaf = b
     pair.b.next = nextB
-    pair.id = 0
+    pair.slot.id = 0
+    pair.slot.arbiter = NULL
     a.node.leaf.pairs = pair
     b.node.leaf.pairs = pair
     if nextA != NULL:
@@ -492,9 +493,9 @@ cdef void MarkLeaf(Node *leaf, MarkContext *context) noexcept nogil:
                 # (walking the pairs is otherwise a cache miss per pair).
                 tamias_prefetch(pair.b.next)
                 if context.slotFunc != NULL:
-                    context.slotFunc(pair.a.leaf.obj, leaf.obj, &pair.id, context.data)
+                    context.slotFunc(pair.a.leaf.obj, leaf.obj, &pair.slot, context.data)
                 else:
-                    pair.id = context.func(pair.a.leaf.obj, leaf.obj, pair.id, context.data)
+                    pair.slot.id = context.func(pair.a.leaf.obj, leaf.obj, pair.slot.id, context.data)
                 pair = pair.b.next
             else:
                 pair = pair.a.next

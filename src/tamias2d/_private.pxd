@@ -30,7 +30,9 @@ cdef inline void cpSpaceUncacheArbiter(cpSpace *space, cpArbiter *arb) noexcept 
     shape_pair[0] = arb.a
     shape_pair[1] = arb.b
     cdef cpHashValue arbHashID = CP_HASH_PAIR(<cpHashValue>arb.a, <cpHashValue>arb.b)
-    cpHashSetRemove(space.cachedArbiters, arbHashID, shape_pair)
+    cdef cpArbiter *removed = <cpArbiter *>cpHashSetRemove(space.cachedArbiters, arbHashID, shape_pair)
+    if removed != NULL:
+        removed.cached = 0
     cpArrayDeleteObj(space.arbiters, arb)
 
 # -- collision handler dispatch ------------------------------------------------------

@@ -2556,8 +2556,9 @@ cdef void _link_arbiters(Parsed *p, Objects *o, Blocks *m, cpSpace *space) noexc
         arb = &arbs[p.cached[k]]
         pair_key[0] = <cpShape *>arb.a
         pair_key[1] = <cpShape *>arb.b
-        cpHashSetInsert(space.cachedArbiters, CP_HASH_PAIR(<cpHashValue>arb.a, <cpHashValue>arb.b),
-                        pair_key, NULL, arb)
+        if cpHashSetInsert(space.cachedArbiters, CP_HASH_PAIR(<cpHashValue>arb.a, <cpHashValue>arb.b),
+                           pair_key, NULL, arb) == arb:
+            arb.cached = 1
 
 
 
@@ -2931,7 +2932,7 @@ cdef int _write_pairs(Writer *w, Capture *cap) except -1:
         rec.b_leaf = _num(&cap.nodes, pair.b.leaf)
         rec.b_prev = _num(&cap.pairs, pair.b.prev)
         rec.b_next = _num(&cap.pairs, pair.b.next)
-        rec.id = pair.id
+        rec.id = pair.slot.id
         w_put(w, &rec, sizeof(PairRec))
     return 0
 
@@ -3009,7 +3010,8 @@ cdef void _link_pairs(Parsed *p, Node **blocks, Pair *pairs) noexcept nogil:
         q.b.leaf = _node_at(p, blocks, r.b_leaf)
         q.b.prev = &pairs[r.b_prev] if r.b_prev >= 0 else NULL
         q.b.next = &pairs[r.b_next] if r.b_next >= 0 else NULL
-        q.id = r.id
+        q.slot.id = r.id
+        q.slot.arbiter = NULL   # a guess, not state: the copy looks its arbiters up
 
 
 # -- handles: the spatial hashes' reference-counted handles ---------------------------------------

@@ -52,7 +52,7 @@ from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, StageResetArbiter
     cpSpaceRejectPair, cpSpaceAcceptCollision, cpSpacePushFreshContactBuffer,
     cpContactBufferGetArray, cpSpacePushContacts, cpSpaceCollideShapes, cpShapeUpdateFunc)
 from tamias2d._spatialindex cimport cpSpatialIndexEach, cpSpatialIndexReindexQuery
-from tamias2d._bbtree cimport cpBBTreeReindexQuerySlots
+from tamias2d._bbtree cimport cpBBTreeReindexQuerySlots, cpPairSlot
 from tamias2d.collision cimport (cpCollide, CollisionDiagnostics, cpCollisionTakeDiagnostics,
     cpCollisionPutDiagnostics)
 from tamias2d._config cimport (cpCollisionID, cpHashValue, CP_MAX_CONTACTS_PER_ARBITER,
@@ -152,8 +152,9 @@ cdef void *_reserve(cpSpace *space, int which, int need, size_t size) noexcept n
 cdef struct SoftCandidate:
     cpShape *a
     cpShape *b
-    cpCollisionID *slot       # where the broad phase keeps the pair's id (NULL: not kept)
+    cpPairSlot *slot          # what the broad phase keeps for the pair (NULL: nothing)
     cpCollisionID id
+    cpArbiter *guess          # the slot's arbiter from an earlier step, unchecked
     cpFloat margin            # the pair's (cpSpaceRejectPair)
     cpArbiter *arb            # its arbiter if cached (looked up with the narrow phase)
     cpCollisionInfo info
@@ -271,7 +272,7 @@ def _profile(on):
 # same whoever ran which pair. A begin or pre-solve callback therefore sees
 # every pair's narrow phase done.
 
-cdef void SoftCollectPair(void *a, void *b, cpCollisionID *slot, void *data) noexcept nogil:
+cdef void SoftCollectPair(void *a, void *b, cpPairSlot *slot, void *data) noexcept nogil:
     # The cheap rejection here (most pairs of the broad phase, whose boxes
     # are widened for continuous collision, go no further); the narrow phase
     # of the others later.
@@ -292,27 +293,52 @@ cdef void SoftCollectPair(void *a, void *b, cpCollisionID *slot, void *data) noe
     c.a = <cpShape *>a
     c.b = <cpShape *>b
     c.slot = slot
-    c.id = slot[0] if slot != NULL else 0
+    if slot != NULL:
+        c.id = slot.id
+        c.guess = <cpArbiter *>slot.arbiter
+    else:
+        c.id = 0
+        c.guess = NULL
     c.margin = margin
     ctx.candidateCount = n + 1
+
+# Off only in tests, which check that the guesses change nothing.
+cdef bint _use_guesses = 1
+
+cdef inline bint SoftGuessHolds(const cpArbiter *arb, const cpCollisionInfo *info) noexcept nogil:
+    # The guess is the pair's cached arbiter: in the cache and of these two
+    # shapes (the cache keeps one arbiter per pair, in either order). An
+    # arbiter's memory lives as long as the space, so a stale guess is safe
+    # to read.
+    return arb != NULL and arb.cached and (
+        (arb.a == info.a and arb.b == info.b) or (arb.a == info.b and arb.b == info.a))
 
 cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
     # Also finds a touching pair's cached arbiter: the cache is only read
     # here (pairs new this step get theirs afterwards, on the calling thread).
+    # The broad phase's pair remembers it from the last step; the cache is
+    # asked only when that guess is wrong (the answer is the same).
     cdef int i
     cdef SoftCandidate *c
     cdef const cpShape *pair[2]
     for i in range(begin, end):
+        if i + 2 < end:
+            tamias_prefetch(ctx.candidates[i + 2].guess)
         c = &ctx.candidates[i]
         c.info = cpCollide(c.a, c.b, c.id, c.contacts, c.margin)
         if c.slot != NULL:
-            c.slot[0] = c.info.id
+            c.slot.id = c.info.id
         c.arb = NULL
         if c.info.count > 0:
-            pair[0] = c.info.a
-            pair[1] = c.info.b
-            c.arb = <cpArbiter *>cpHashSetFind(ctx.space.cachedArbiters,
-                CP_HASH_PAIR(<cpHashValue>c.info.a, <cpHashValue>c.info.b), pair)
+            if _use_guesses and SoftGuessHolds(c.guess, &c.info):
+                c.arb = c.guess
+            else:
+                pair[0] = c.info.a
+                pair[1] = c.info.b
+                c.arb = <cpArbiter *>cpHashSetFind(ctx.space.cachedArbiters,
+                    CP_HASH_PAIR(<cpHashValue>c.info.a, <cpHashValue>c.info.b), pair)
+                if c.slot != NULL:
+                    c.slot.arbiter = c.arb
 
 cdef inline void SoftPrefetchArbiter(cpSpace *space, SoftCandidate *c) noexcept nogil:
     cdef cpHashSet *arbs = space.cachedArbiters
@@ -328,6 +354,7 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     cdef cpSpace *space = ctx.space
     cdef SoftCandidate *c
     cdef cpContact *contacts
+    cdef cpArbiter *arb
     cdef int i
     cpSpacePushFreshContactBuffer(space)
     cpSpatialIndexEach(space.dynamicShapes, cpShapeUpdateFunc, NULL)
@@ -355,7 +382,9 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
         memcpy(contacts, c.contacts, c.info.count * sizeof(cpContact))
         c.info.arr = contacts
         cpSpacePushContacts(space, c.info.count)
-        cpSpaceAcceptCollision(space, c.a, c.b, &c.info, c.arb)
+        arb = cpSpaceAcceptCollision(space, c.a, c.b, &c.info, c.arb)
+        if c.slot != NULL and c.arb == NULL:
+            c.slot.arbiter = arb    # new this step: next step's guess
 
 
 # -- gather ----------------------------------------------------------------------------
@@ -1597,6 +1626,15 @@ def _lanes_path(name=None):
             raise ValueError(f"no contact-kernel path {name!r} here; there are {_lanes_paths()}")
     current = SoftLanesGetPath()
     return next(n for n, p in _LANE_PATHS.items() if p == current)
+
+def _arbiter_guesses(on=None):
+    """Whether the narrow phase takes a pair's arbiter from the broad
+    phase's memory of it (and, given `on`, set it first; for tests, which
+    check that without the guesses every step is the same)."""
+    global _use_guesses
+    if on is not None:
+        _use_guesses = bool(on)
+    return bool(_use_guesses)
 
 def _pool_state():
     """The soft solver's thread pool: (workers started, stages handed out)."""

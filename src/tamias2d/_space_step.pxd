@@ -55,8 +55,8 @@ cdef cpCollisionID cpSpaceCollideShapes(void *a, void *b, cpCollisionID id, void
 # solver's, on several threads): the rejection test and the pair's margin,
 # then (the contacts on the contact buffer) arbiter, callbacks, this step's list.
 cdef cpBool cpSpaceRejectPair(cpSpace *space, cpShape *a, cpShape *b, cpFloat *margin) noexcept nogil
-cdef void cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
-                                 cpCollisionInfo *info, cpArbiter *found) noexcept nogil
+cdef cpArbiter *cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
+                                       cpCollisionInfo *info, cpArbiter *found) noexcept nogil
 cdef cpBool cpSpaceArbiterSetFilter(void *arb, void *space) noexcept nogil
 # cpShapeCacheBB as a spatial-index iterator.
 cdef void cpShapeUpdateFunc(void *shape, void *unused) noexcept nogil

@@ -269,9 +269,10 @@ cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID 
 # What follows the narrow phase for a pair that touches (its contacts pushed
 # on the space's contact buffer): the persistent arbiter (`found` if the
 # caller looked it up already, else looked up or made here), begin and
-# pre-solve callbacks, the arbiter into this step's list.
-cdef void cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
-                                 cpCollisionInfo *info, cpArbiter *found) noexcept nogil:
+# pre-solve callbacks, the arbiter into this step's list. Returns the
+# arbiter (NULL out of memory).
+cdef cpArbiter *cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
+                                       cpCollisionInfo *info, cpArbiter *found) noexcept nogil:
     cdef const cpShape *shape_pair[2]
     cdef cpHashValue arbHashID
     cdef cpArbiter *arb
@@ -284,13 +285,15 @@ cdef void cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
         arbHashID = CP_HASH_PAIR(<cpHashValue>info.a, <cpHashValue>info.b)
         arb = <cpArbiter *>cpHashSetInsert(space.cachedArbiters, arbHashID, shape_pair,
                                            cpSpaceArbiterSetTrans, space)
+    if arb != NULL:
+        arb.cached = 1
     if arb == NULL or arb.stamp == space.stamp:
         # (Or the pair was handled already in this step: the spatial hash
         # reports a pair again when a callback runs a query in the middle of
         # its pass, as a query moves the hash's stamp on. Munk2D pushes the
         # arbiter twice; threaded twice, it makes the flood fill loop.)
         cpSpacePopContacts(space, info.count)
-        return
+        return arb
     cpArbiterUpdate(arb, info, space)
 
     if arb.state == CP_ARBITER_STATE_FIRST_COLLISION:
@@ -313,6 +316,7 @@ cdef void cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
             arb.state = CP_ARBITER_STATE_NORMAL
 
     arb.stamp = space.stamp
+    return arb
 
 # Per-step filter of the arbiter cache: separate callbacks and expiry.
 cdef cpBool cpSpaceArbiterSetFilter(void *elt, void *data) noexcept nogil:
@@ -336,6 +340,7 @@ cdef cpBool cpSpaceArbiterSetFilter(void *elt, void *data) noexcept nogil:
         arb.contacts = NULL
         arb.count = 0
         cpArrayPush(space.pooledArbiters, arb)
+        arb.cached = 0
         if ticks >= 1:
             # Not in this step's arbiter array: forget the shapes (see
             # cachedArbitersFilter).
@@ -533,7 +538,8 @@ cdef void cpSpaceActivateBody(cpSpace *space, cpBody *body) noexcept nogil:
             shape_pair[0] = arb.a
             shape_pair[1] = arb.b
             arbHashID = CP_HASH_PAIR(<cpHashValue>arb.a, <cpHashValue>arb.b)
-            cpHashSetInsert(space.cachedArbiters, arbHashID, shape_pair, NULL, arb)
+            if cpHashSetInsert(space.cachedArbiters, arbHashID, shape_pair, NULL, arb) == arb:
+                arb.cached = 1
             arb.stamp = space.stamp
             cpArrayPush(space.arbiters, arb)
             cpfree(contacts)

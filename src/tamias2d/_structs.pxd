@@ -258,6 +258,8 @@ cdef struct cpArbiter:
     cpTimestamp stamp
     cpArbiterState state
     cpBool processCollision
+    # In space.cachedArbiters (the soft solver checks its guesses against it).
+    cpBool cached
 
 # -- constraints (declared for the body lists; joints are not ported yet) -------
 ctypedef void (*cpConstraintPreStepImpl)(cpConstraint *constraint, cpFloat dt) noexcept nogil

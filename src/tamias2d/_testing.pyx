@@ -550,7 +550,7 @@ cdef class _TestTree:
             return out
         pair = leaf.node.leaf.pairs
         while pair != NULL:
-            out.append(((<TestObj *>pair.a.leaf.obj).id, (<TestObj *>pair.b.leaf.obj).id, pair.id))
+            out.append(((<TestObj *>pair.a.leaf.obj).id, (<TestObj *>pair.b.leaf.obj).id, pair.slot.id))
             pair = pair.a.next if pair.a.leaf == leaf else pair.b.next
         return out
 

@@ -198,6 +198,7 @@ cdef cpArbiter *cpArbiterInit(cpArbiter *arb, cpShape *a, cpShape *b) noexcept n
     arb.stamp = 0
     arb.state = CP_ARBITER_STATE_FIRST_COLLISION
     arb.processCollision = 1
+    arb.cached = 0
     arb.data = NULL
     return arb
 

@@ -364,6 +364,7 @@ cdef cpBool cachedArbitersFilter(void *elt, void *data) noexcept nogil:
         cpArbiterUnthread(arb)
         cpArrayDeleteObj(context.space.arbiters, arb)
         cpArrayPush(context.space.pooledArbiters, arb)
+        arb.cached = 0
         # A pooled arbiter forgets its shapes so that a stale Python Arbiter
         # view can tell (the removed shape may be freed).
         arb.a = NULL
