@@ -456,3 +456,42 @@ def test_doctests():
 def test_every_public_function_has_an_example():
     for name in collision.__all__:
         assert ">>>" in (getattr(collision, name).__doc__ or ""), name
+
+
+# -- the soft solver's polygon pairs: separating axes instead of GJK and EPA -------------
+
+def _random_polygon(rng, centre, radius, sides, angle):
+    points = [(centre[0] + radius * (1 + 0.3 * rng.random()) * math.cos(angle + 2 * math.pi * k / sides),
+               centre[1] + radius * (1 + 0.3 * rng.random()) * math.sin(angle + 2 * math.pi * k / sides))
+              for k in range(sides)]
+    body = tamias2d.Body(1, 1)
+    poly = tamias2d.Poly(body, points)
+    poly.cache_bb()
+    return poly
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_separating_axes_find_what_epa_finds(seed):
+    # Where the polygons overlap, the soft solver's narrow phase must find
+    # the contacts Munk2D's GJK and EPA find (same features, same normal and
+    # points up to EPA's tolerance); apart, it is Munk2D's code itself.
+    import random
+    rng = random.Random(seed)
+    overlapping = 0
+    for trial in range(300):
+        a = _random_polygon(rng, (0, 0), 1.0, rng.randint(3, 8), rng.random() * 7)
+        offset = 1.0 + 2.0 * rng.random()
+        direction = rng.random() * 7
+        b = _random_polygon(rng, (offset * math.cos(direction), offset * math.sin(direction)),
+                            1.0, rng.randint(3, 8), rng.random() * 7)
+        for margin in (0.0, 0.1):
+            first, _, n, contacts = _testing._collide(a, b, margin=margin)
+            first_s, _, n_s, contacts_s = _testing._collide(a, b, margin=margin, soft=True)
+            assert first == first_s
+            assert [c[2] for c in contacts] == [c[2] for c in contacts_s], trial
+            if contacts:
+                overlapping += margin == 0.0
+                assert abs(n.x - n_s.x) < 1e-6 and abs(n.y - n_s.y) < 1e-6, trial
+                for (p1, p2, _), (q1, q2, _) in zip(contacts, contacts_s):
+                    assert (p1 - q1).length < 1e-6 and (p2 - q2).length < 1e-6, trial
+    assert overlapping > 50          # the test saw the new path at work

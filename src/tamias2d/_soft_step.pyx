@@ -53,7 +53,7 @@ from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, StageResetArbiter
     cpContactBufferGetArray, cpSpacePushContacts, cpSpaceCollideShapes, cpShapeUpdateFunc)
 from tamias2d._spatialindex cimport cpSpatialIndexEach, cpSpatialIndexReindexQuery
 from tamias2d._bbtree cimport cpBBTreeReindexQuerySlots, cpPairSlot
-from tamias2d.collision cimport (cpCollide, CollisionDiagnostics, cpCollisionTakeDiagnostics,
+from tamias2d.collision cimport (cpCollideSoft, CollisionDiagnostics, cpCollisionTakeDiagnostics,
     cpCollisionPutDiagnostics)
 from tamias2d._config cimport (cpCollisionID, cpHashValue, CP_MAX_CONTACTS_PER_ARBITER,
     CP_HASH_PAIR, tamias_prefetch)
@@ -325,7 +325,7 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
         if i + 2 < end:
             tamias_prefetch(ctx.candidates[i + 2].guess)
         c = &ctx.candidates[i]
-        c.info = cpCollide(c.a, c.b, c.id, c.contacts, c.margin)
+        c.info = cpCollideSoft(c.a, c.b, c.id, c.contacts, c.margin)
         if c.slot != NULL:
             c.slot.id = c.info.id
         c.arb = NULL

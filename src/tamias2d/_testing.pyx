@@ -64,8 +64,8 @@ from tamias2d.shape cimport (_VertBuffer, _verts_arg, cpShapeFilterReject, cpSha
     cpCircleShapeNew, cpSegmentShapeNew, cpPolyShapeNew, cpPolyShapeNewRaw, cpBoxShapeNew,
     cpBoxShapeNew2, cpCircleShapeGetRadius, cpSegmentShapeGetRadius, cpPolyShapeGetRadius,
     cpPolyShapeGetCount, cpPolyShapeGetVert)
-from tamias2d.collision cimport (cpCollide, collision_check_flags, shape_pointer,
-    CollisionFuncs)
+from tamias2d.collision cimport (cpCollide, cpCollideSoft, collision_check_flags,
+    shape_pointer, CollisionFuncs)
 
 # Defined in _containers, next to the thread-local C state they set and read.
 from tamias2d._containers import _set_alloc_failure, _take_out_of_memory
@@ -847,7 +847,7 @@ def _bias_velocity(Body body not None):
     return vec2d_from_cpv(body._body.v_bias), body._body.w_bias
 
 
-def _collide(shape_a, shape_b, collision_id=0):
+def _collide(shape_a, shape_b, collision_id=0, margin=0.0, soft=False):
     """cpCollide on two shapes: returns (a_is_first, id, normal, contacts)
     where contacts is a list of (r1, r2, hash); a_is_first is False when the
     types were sorted by swapping the pair (then r1 is on shape_b).
@@ -865,7 +865,11 @@ def _collide(shape_a, shape_b, collision_id=0):
     cdef cpCollisionInfo info
     cdef cpCollisionID cid = collision_id
     cdef int i
-    info = cpCollide(a, b, cid, contacts, 0.0)
+    # soft: the soft solver's narrow phase (polygons by separating axes).
+    if soft:
+        info = cpCollideSoft(a, b, cid, contacts, margin)
+    else:
+        info = cpCollide(a, b, cid, contacts, margin)
     collision_check_flags()
     return (info.a == a, info.id, vec2d_from_cpv(info.n),
             [(vec2d_from_cpv(contacts[i].r1), vec2d_from_cpv(contacts[i].r2), contacts[i].hash)

@@ -32,6 +32,12 @@ from tamias2d._private cimport (relative_velocity, normal_relative_velocity,
 cdef cpCollisionInfo cpCollide(const cpShape *a, const cpShape *b, cpCollisionID id,
                                cpContact *contacts, cpFloat margin) noexcept nogil
 
+# cpCollide as the soft solver runs it: the same but for polygon pairs whose
+# cores overlap, which take the separating-axis test instead of GJK and EPA
+# (the same axis, found faster; not Munk2D's bits).
+cdef cpCollisionInfo cpCollideSoft(const cpShape *a, const cpShape *b, cpCollisionID id,
+                                   cpContact *contacts, cpFloat margin) noexcept nogil
+
 # Contact points of two shapes oriented a -> b, as the query API reports them.
 cdef cpContactPointSet cpShapesCollide(const cpShape *a, const cpShape *b) noexcept nogil
 

@@ -631,6 +631,76 @@ cdef void CircleToPoly(const cpShape *a, const cpShape *b, cpCollisionInfo *info
         cpCollisionInfoPushContact(info, cpvadd(points.a, cpvmult(n, circle.r)),
                                    cpvadd(points.b, cpvmult(n, -poly.r)), 0)
 
+# -- the soft solver's polygon pairs: separating axes ---------------------------------------
+# Where two polygons' cores (their vertices, radius aside) overlap, the axis
+# of least penetration is a face normal of one of them: what EPA converges
+# to, found here with count1*count2 dot products and no iterations (Box2D's
+# polygon collider does the same for overlapping cores). Cores apart go to
+# GJK as before, since their closest features may be two corners, which no
+# face normal describes. Not Munk2D's, so not the chipmunk solver's.
+
+# Up to two octagons; beyond, GJK's few support searches cost less.
+cdef enum:
+    SEPARATING_AXES_MAX_WORK = 64
+
+cdef inline cpFloat PolyFaceSeparation(const cpPolyShape *ref, const cpPolyShape *inc,
+                                       int *face) noexcept nogil:
+    # The face of `ref` along whose normal `inc` reaches least far in, and how
+    # far out that is (negative: overlap). Stops at the first positive one.
+    cdef cpFloat best = -INFINITY
+    cdef cpFloat reach, x, sep
+    cdef cpVect n
+    cdef int i, j
+    face[0] = 0
+    for i in range(ref.count):
+        n = ref.planes[i].n
+        reach = INFINITY
+        for j in range(inc.count):
+            x = cpvdot(n, inc.planes[j].v0)
+            if x < reach:
+                reach = x
+        sep = reach - cpvdot(n, ref.planes[i].v0)
+        if sep > best:
+            best = sep
+            face[0] = i
+            if sep > 0.0:
+                break
+    return best
+
+cdef void PolyToPolySeparatingAxes(const cpShape *a, const cpShape *b,
+                                   cpCollisionInfo *info) noexcept nogil:
+    cdef const cpPolyShape *poly1 = <const cpPolyShape *>a
+    cdef const cpPolyShape *poly2 = <const cpPolyShape *>b
+    cdef ClosestPoints points
+    cdef int face1, face2
+    cdef cpFloat sep1, sep2
+    if (poly1.count < 3 or poly2.count < 3
+            or poly1.count * poly2.count > SEPARATING_AXES_MAX_WORK):
+        # Degenerate polygons have no faces to test; big ones are GJK's.
+        PolyToPoly(a, b, info)
+        return
+    sep1 = PolyFaceSeparation(poly1, poly2, &face1)
+    if sep1 > 0.0:
+        PolyToPoly(a, b, info)
+        return
+    sep2 = PolyFaceSeparation(poly2, poly1, &face2)
+    if sep2 > 0.0:
+        PolyToPoly(a, b, info)
+        return
+    # The shallower of the two (a tie to poly1's face); the normal points
+    # from poly1 to poly2 either way. Only n and d are read by the clipping.
+    if sep2 > sep1:
+        points.n = cpvneg(poly2.planes[face2].n)
+        points.d = sep2
+    else:
+        points.n = poly1.planes[face1].n
+        points.d = sep1
+    points.a = cpv(0.0, 0.0)
+    points.b = cpv(0.0, 0.0)
+    points.id = info.id
+    ContactPoints(SupportEdgeForPoly(poly1, points.n), SupportEdgeForPoly(poly2, cpvneg(points.n)),
+                  points, info)
+
 cdef void CollisionError_(const cpShape *a, const cpShape *b, cpCollisionInfo *info) noexcept nogil:
     # Munk2D aborts the process here. The slot is reached only with unsorted
     # types; the caller raises CollisionError once back in Python.
@@ -648,8 +718,9 @@ CollisionFuncs[6] = CircleToPoly
 CollisionFuncs[7] = SegmentToPoly
 CollisionFuncs[8] = PolyToPoly
 
-cdef cpCollisionInfo cpCollide(const cpShape *a, const cpShape *b, cpCollisionID id,
-                               cpContact *contacts, cpFloat margin) noexcept nogil:
+cdef inline cpCollisionInfo CollideWith(const CollisionFunc *funcs, const cpShape *a,
+                                        const cpShape *b, cpCollisionID id, cpContact *contacts,
+                                        cpFloat margin) noexcept nogil:
     cdef cpCollisionInfo info
     cdef unsigned int index
     info.margin = margin
@@ -665,10 +736,24 @@ cdef cpCollisionInfo cpCollide(const cpShape *a, const cpShape *b, cpCollisionID
         info.b = a
     index = <unsigned int>info.a.klass.type + <unsigned int>info.b.klass.type * CP_NUM_SHAPES
     if index < 9:
-        CollisionFuncs[index](info.a, info.b, &info)
+        funcs[index](info.a, info.b, &info)
     else:
         CollisionError_(info.a, info.b, &info)
     return info
+
+cdef cpCollisionInfo cpCollide(const cpShape *a, const cpShape *b, cpCollisionID id,
+                               cpContact *contacts, cpFloat margin) noexcept nogil:
+    return CollideWith(CollisionFuncs, a, b, id, contacts, margin)
+
+# The soft solver's table: Munk2D's, but polygon pairs by separating axes.
+cdef CollisionFunc SoftCollisionFuncs[9]
+for _i in range(9):
+    SoftCollisionFuncs[_i] = CollisionFuncs[_i]
+SoftCollisionFuncs[8] = PolyToPolySeparatingAxes
+
+cdef cpCollisionInfo cpCollideSoft(const cpShape *a, const cpShape *b, cpCollisionID id,
+                                   cpContact *contacts, cpFloat margin) noexcept nogil:
+    return CollideWith(SoftCollisionFuncs, a, b, id, contacts, margin)
 
 cdef cpContactPointSet cpShapesCollide(const cpShape *a, const cpShape *b) noexcept nogil:
     cdef cpContact contacts[CP_MAX_CONTACTS_PER_ARBITER]
