@@ -751,3 +751,30 @@ def test_queries_from_inside_a_callback():
     s.on_collision(pre_solve=pre_solve)
     s.step(0.01)
     assert found == [2, 2]
+
+
+@pytest.mark.parametrize("types", [(None, None), (1, None), (1, 2), (2, 1)])
+def test_post_solve_runs_however_it_is_registered(types):
+    # The step skips its post-solve pass when no handler has a post_solve;
+    # each way of registering one must still be called, as often as pymunk
+    # calls it.
+    import pymunk
+    counts = []
+    for mod in (tamias2d, pymunk):
+        s = mod.Space()
+        s.gravity = 0, -100
+        floor = mod.Segment(s.static_body, (-50, 0), (50, 0), 1)
+        floor.collision_type = 2
+        s.add(floor)
+        for i in range(3):
+            b = mod.Body(1, 10)
+            b.position = -20 + 20 * i, 5
+            c = mod.Circle(b, 4)
+            c.collision_type = 1
+            s.add(b, c)
+        calls = []
+        s.on_collision(types[0], types[1], post_solve=lambda arb, space, data: calls.append(1))
+        for _ in range(60):
+            s.step(1 / 60)
+        counts.append(len(calls))
+    assert counts[0] == counts[1] > 0

@@ -14,7 +14,7 @@ from libc.string cimport memcpy
 
 from tamias2d._config cimport (cpFloat, cpBool, cpHashValue, cpCollisionID, cpTimestamp,
     CP_HASH_PAIR, CP_MAX_CONTACTS_PER_ARBITER, CP_BUFFER_BYTES)
-from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, cpArray,
+from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, cpArray, cpCollisionHandler,
     cpCollisionInfo, cpContactBufferHeader, cpPostStepCallback, cpPostStepFunc,
     cpConstraint, cpBodyType, cpSpatialIndex,
     CP_BODY_TYPE_DYNAMIC, CP_BODY_TYPE_KINEMATIC, CP_BODY_TYPE_STATIC,
@@ -31,7 +31,7 @@ from tamias2d.body cimport (cpBodyActivate, cpBodyGetType, cpBodyIsSleeping,
 from tamias2d.shape cimport cpShapeCacheBB, cpShapeFilterReject
 from tamias2d.collision cimport cpCollide
 from tamias2d.arbiter cimport (cpArbiterInit, cpArbiterUpdate, cpArbiterPreStep,
-    cpArbiterApplyCachedImpulse, cpArbiterApplyImpulse, cpArbiterUnthread)
+    cpArbiterApplyCachedImpulse, cpArbiterApplyImpulse, cpArbiterUnthread, cpCollisionDoNothing)
 from tamias2d.constraints cimport tamias_constraint_clear_impulse
 from tamias2d._private cimport (cpArbiterThreadForBody, cpArbiterNext, cpConstraintNext,
     cpSpaceArrayForBodyType, cpSpaceUncacheArbiter, cpCallHandlers,
@@ -479,6 +479,18 @@ cdef void StageSolve(cpSpace *space, cpFloat dt) noexcept nogil:
             constraint = <cpConstraint *>constraints.arr[j]
             constraint.klass.applyImpulse(constraint, dt)
 
+cdef void _notePostSolve(void *elt, void *data) noexcept nogil:
+    if (<cpCollisionHandler *>elt).postSolveFunc != cpCollisionDoNothing:
+        (<bint *>data)[0] = 1
+
+cdef bint cpSpaceHasPostSolve(cpSpace *space) noexcept nogil:
+    # Whether any handler does something after the solve (a handful of
+    # handlers to look at, against a pass over every arbiter).
+    cdef bint found = space.globalHandler.postSolveFunc != cpCollisionDoNothing
+    if not found:
+        cpHashSetEach(space.collisionHandlers, _notePostSolve, &found)
+    return found
+
 # Post-solve callbacks: constraints, then arbiters.
 cdef void StagePostSolve(cpSpace *space) noexcept nogil:
     cdef cpArray *arbiters = space.arbiters
@@ -489,6 +501,10 @@ cdef void StagePostSolve(cpSpace *space) noexcept nogil:
         constraint = <cpConstraint *>constraints.arr[i]
         if constraint.postSolve != NULL:
             constraint.postSolve(constraint, space)
+    if not cpSpaceHasPostSolve(space):
+        # Nothing to call: the pass would only flip `swapped` an even number
+        # of times per arbiter.
+        return
     for i in range(arbiters.num):
         cpCallHandlers(<cpArbiter *>arbiters.arr[i], space, PHASE_POST_SOLVE, True)
 
