@@ -50,7 +50,9 @@ from tamias2d.constraints cimport tamias_constraint_scale_impulse
 from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, StageResetArbiters,
     cpSpaceProcessComponents, StageFilterArbiterCache, StagePostSolve,
     cpSpaceRejectPair, cpSpaceAcceptCollision, cpSpacePushFreshContactBuffer,
-    cpContactBufferGetArray, cpSpacePushContacts, cpSpaceCollideShapes, cpShapeUpdateFunc)
+    cpContactBufferGetArray, cpSpacePushContacts, cpSpaceCollideShapes, cpShapeUpdateFunc,
+    cpSpaceHasHandlers)
+from tamias2d.arbiter cimport cpArbiterUpdate
 from tamias2d._spatialindex cimport cpSpatialIndexEach, cpSpatialIndexReindexQuery
 from tamias2d._bbtree cimport cpBBTreeReindexQuerySlots, cpPairSlot
 from tamias2d.collision cimport (cpCollideSoft, CollisionDiagnostics, cpCollisionTakeDiagnostics,
@@ -157,6 +159,7 @@ cdef struct SoftCandidate:
     cpArbiter *guess          # the slot's arbiter from an earlier step, unchecked
     cpFloat margin            # the pair's (cpSpaceRejectPair)
     cpArbiter *arb            # its arbiter if cached (looked up with the narrow phase)
+    bint updated              # arb has this step's contacts (cpArbiterUpdate done)
     cpCollisionInfo info
     cpContact contacts[CP_MAX_CONTACTS_PER_ARBITER]
 
@@ -176,6 +179,7 @@ cdef struct SoftContext:
     SoftCandidate *candidates # this step's pairs from the broad phase
     int candidateCount
     int candidateCap
+    bint updateInNarrow       # no begin or pre-solve callbacks: arbiters updated in parallel
     bint threaded             # stages may run on the pool (SoftRun)
     bint serialVelocities     # a body has its own velocity_func (Python: one thread)
     bint serialPositions      # a body has its own position_func
@@ -329,6 +333,7 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
         if c.slot != NULL:
             c.slot.id = c.info.id
         c.arb = NULL
+        c.updated = 0
         if c.info.count > 0:
             if _use_guesses and SoftGuessHolds(c.guess, &c.info):
                 c.arb = c.guess
@@ -339,6 +344,14 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
                     CP_HASH_PAIR(<cpHashValue>c.info.a, <cpHashValue>c.info.b), pair)
                 if c.slot != NULL:
                     c.slot.arbiter = c.arb
+            if c.arb != NULL and ctx.updateInNarrow:
+                # What cpSpaceAcceptCollision would do first, done here as
+                # no callback runs before it that could change its inputs
+                # (shapes' friction, elasticity, types; the handlers). The
+                # contacts are the candidate's until the serial pass moves
+                # them to the contact buffer.
+                cpArbiterUpdate(c.arb, &c.info, ctx.space)
+                c.updated = 1
 
 cdef inline void SoftPrefetchArbiter(cpSpace *space, SoftCandidate *c) noexcept nogil:
     cdef cpHashSet *arbs = space.cachedArbiters
@@ -361,6 +374,7 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     ctx.candidates = <SoftCandidate *>space.softScratch.buf[SOFT_SCRATCH_CANDIDATES]
     ctx.candidateCap = space.softScratch.cap[SOFT_SCRATCH_CANDIDATES]
     ctx.candidateCount = 0
+    ctx.updateInNarrow = not cpSpaceHasHandlers(space, 1, 1, 0)
     if not cpBBTreeReindexQuerySlots(space.dynamicShapes, SoftCollectPair, ctx):
         # A spatial hash: pair by pair, as the chipmunk solver.
         cpSpatialIndexReindexQuery(space.dynamicShapes, cpSpaceCollideShapes, space)
@@ -378,11 +392,17 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
             continue
         contacts = cpContactBufferGetArray(space)
         if contacts == NULL:
-            continue  # out of memory: the flag is up, the pair is skipped
+            # Out of memory: the flag is up, the pair is skipped.
+            if c.updated:
+                c.arb.contacts = NULL
+                c.arb.count = 0
+            continue
         memcpy(contacts, c.contacts, c.info.count * sizeof(cpContact))
         c.info.arr = contacts
+        if c.updated:
+            c.arb.contacts = contacts
         cpSpacePushContacts(space, c.info.count)
-        arb = cpSpaceAcceptCollision(space, c.a, c.b, &c.info, c.arb)
+        arb = cpSpaceAcceptCollision(space, c.a, c.b, &c.info, c.arb, c.updated)
         if c.slot != NULL and c.arb == NULL:
             c.slot.arbiter = arb    # new this step: next step's guess
 

@@ -56,7 +56,11 @@ cdef cpCollisionID cpSpaceCollideShapes(void *a, void *b, cpCollisionID id, void
 # then (the contacts on the contact buffer) arbiter, callbacks, this step's list.
 cdef cpBool cpSpaceRejectPair(cpSpace *space, cpShape *a, cpShape *b, cpFloat *margin) noexcept nogil
 cdef cpArbiter *cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
-                                       cpCollisionInfo *info, cpArbiter *found) noexcept nogil
+                                       cpCollisionInfo *info, cpArbiter *found,
+                                       bint updated) noexcept nogil
+# Whether any collision handler of the space acts in one of these phases.
+cdef bint cpSpaceHasHandlers(cpSpace *space, bint begin, bint preSolve,
+                             bint postSolve) noexcept nogil
 cdef cpBool cpSpaceArbiterSetFilter(void *arb, void *space) noexcept nogil
 # cpShapeCacheBB as a spatial-index iterator.
 cdef void cpShapeUpdateFunc(void *shape, void *unused) noexcept nogil

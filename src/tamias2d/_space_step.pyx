@@ -263,16 +263,18 @@ cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID 
     if info.count == 0:
         return info.id
     cpSpacePushContacts(space, info.count)
-    cpSpaceAcceptCollision(space, a, b, &info, NULL)
+    cpSpaceAcceptCollision(space, a, b, &info, NULL, 0)
     return info.id
 
 # What follows the narrow phase for a pair that touches (its contacts pushed
 # on the space's contact buffer): the persistent arbiter (`found` if the
 # caller looked it up already, else looked up or made here), begin and
-# pre-solve callbacks, the arbiter into this step's list. Returns the
-# arbiter (NULL out of memory).
+# pre-solve callbacks, the arbiter into this step's list. `updated`: the
+# caller ran cpArbiterUpdate on `found` already. Returns the arbiter (NULL
+# out of memory).
 cdef cpArbiter *cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
-                                       cpCollisionInfo *info, cpArbiter *found) noexcept nogil:
+                                       cpCollisionInfo *info, cpArbiter *found,
+                                       bint updated) noexcept nogil:
     cdef const cpShape *shape_pair[2]
     cdef cpHashValue arbHashID
     cdef cpArbiter *arb
@@ -294,7 +296,8 @@ cdef cpArbiter *cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
         # arbiter twice; threaded twice, it makes the flood fill loop.)
         cpSpacePopContacts(space, info.count)
         return arb
-    cpArbiterUpdate(arb, info, space)
+    if not updated:
+        cpArbiterUpdate(arb, info, space)
 
     if arb.state == CP_ARBITER_STATE_FIRST_COLLISION:
         cpCallHandlers(arb, space, PHASE_BEGIN, True)
@@ -479,17 +482,32 @@ cdef void StageSolve(cpSpace *space, cpFloat dt) noexcept nogil:
             constraint = <cpConstraint *>constraints.arr[j]
             constraint.klass.applyImpulse(constraint, dt)
 
-cdef void _notePostSolve(void *elt, void *data) noexcept nogil:
-    if (<cpCollisionHandler *>elt).postSolveFunc != cpCollisionDoNothing:
-        (<bint *>data)[0] = 1
+cdef struct HandlerSearch:
+    bint begin, preSolve, postSolve       # the phases asked about
+    bint found
 
-cdef bint cpSpaceHasPostSolve(cpSpace *space) noexcept nogil:
-    # Whether any handler does something after the solve (a handful of
-    # handlers to look at, against a pass over every arbiter).
-    cdef bint found = space.globalHandler.postSolveFunc != cpCollisionDoNothing
-    if not found:
-        cpHashSetEach(space.collisionHandlers, _notePostSolve, &found)
-    return found
+cdef inline bint _handlerActs(const cpCollisionHandler *h, const HandlerSearch *search) noexcept nogil:
+    return ((search.begin and h.beginFunc != cpCollisionDoNothing)
+            or (search.preSolve and h.preSolveFunc != cpCollisionDoNothing)
+            or (search.postSolve and h.postSolveFunc != cpCollisionDoNothing))
+
+cdef void _noteHandler(void *elt, void *data) noexcept nogil:
+    cdef HandlerSearch *search = <HandlerSearch *>data
+    if _handlerActs(<cpCollisionHandler *>elt, search):
+        search.found = 1
+
+cdef bint cpSpaceHasHandlers(cpSpace *space, bint begin, bint preSolve,
+                             bint postSolve) noexcept nogil:
+    # Whether any handler does something in one of these phases (a handful
+    # of handlers to look at, against a pass over every arbiter).
+    cdef HandlerSearch search
+    search.begin = begin
+    search.preSolve = preSolve
+    search.postSolve = postSolve
+    search.found = _handlerActs(&space.globalHandler, &search)
+    if not search.found:
+        cpHashSetEach(space.collisionHandlers, _noteHandler, &search)
+    return search.found
 
 # Post-solve callbacks: constraints, then arbiters.
 cdef void StagePostSolve(cpSpace *space) noexcept nogil:
@@ -501,7 +519,7 @@ cdef void StagePostSolve(cpSpace *space) noexcept nogil:
         constraint = <cpConstraint *>constraints.arr[i]
         if constraint.postSolve != NULL:
             constraint.postSolve(constraint, space)
-    if not cpSpaceHasPostSolve(space):
+    if not cpSpaceHasHandlers(space, 0, 0, 1):
         # Nothing to call: the pass would only flip `swapped` an even number
         # of times per arbiter.
         return
