@@ -53,7 +53,9 @@ from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, StageResetArbiter
     cpContactBufferGetArray, cpSpacePushContacts, cpSpaceCollideShapes, cpShapeUpdateFunc,
     cpSpaceHasHandlers)
 from tamias2d.arbiter cimport cpArbiterUpdate
-from tamias2d._spatialindex cimport cpSpatialIndexEach, cpSpatialIndexReindexQuery
+from tamias2d._spatialindex cimport (cpSpatialIndexEach, cpSpatialIndexReindexQuery,
+    cpSpatialIndexCount)
+from tamias2d.shape cimport cpShapeCacheBB
 from tamias2d._bbtree cimport cpBBTreeReindexQuerySlots, cpPairSlot
 from tamias2d.collision cimport (cpCollideSoft, CollisionDiagnostics, cpCollisionTakeDiagnostics,
     cpCollisionPutDiagnostics)
@@ -175,6 +177,8 @@ cdef struct SoftContext:
     SoftLanes *lanes          # the coloured contacts, colour by colour
     int colorLanes[SOFT_GRAPH_COLORS + 1]   # colour c: lanes[colorLanes[c]:colorLanes[c+1]]
     int *overflow             # SoftContact indices solved one by one
+    volatile long shapesUpdated   # by SoftUpdateShapes
+    int *laneSlots            # contact i goes to lane laneSlots[i] // SOFT_LANES (-1: overflow)
     int overflowCount
     SoftCandidate *candidates # this step's pairs from the broad phase
     int candidateCount
@@ -363,6 +367,21 @@ cdef inline void SoftPrefetchArbiter(cpSpace *space, SoftCandidate *c) noexcept 
         tamias_prefetch(&arbs.table[CP_HASH_PAIR(<cpHashValue>c.info.a,
                                                  <cpHashValue>c.info.b) % arbs.size])
 
+cdef void SoftUpdateShapes(SoftContext *ctx, int begin, int end) noexcept nogil:
+    # The shapes' boxes and world data, body by body (on the pool); counted,
+    # to check that they were all the dynamic index holds.
+    cdef cpArray *bodies = ctx.space.dynamicBodies
+    cdef cpShape *shape
+    cdef long count = 0
+    cdef int i
+    for i in range(begin, end):
+        shape = (<cpBody *>bodies.arr[i]).shapeList
+        while shape != NULL:
+            cpShapeCacheBB(shape)
+            count += 1
+            shape = shape.next
+    tamias_add(&ctx.shapesUpdated, count)
+
 cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     cdef cpSpace *space = ctx.space
     cdef SoftCandidate *c
@@ -370,7 +389,13 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     cdef cpArbiter *arb
     cdef int i
     cpSpacePushFreshContactBuffer(space)
-    cpSpatialIndexEach(space.dynamicShapes, cpShapeUpdateFunc, NULL)
+    # The awake bodies' shapes are the dynamic index's; should they not be
+    # (the counts differ), the index's walk does it again, as the chipmunk
+    # solver does (the boxes come out the same however often they are made).
+    tamias_store(&ctx.shapesUpdated, 0)
+    SoftRun(ctx, SOFT_TASK_UPDATE_SHAPES, 0, space.dynamicBodies.num, 0)
+    if tamias_load(&ctx.shapesUpdated) != cpSpatialIndexCount(space.dynamicShapes):
+        cpSpatialIndexEach(space.dynamicShapes, cpShapeUpdateFunc, NULL)
     ctx.candidates = <SoftCandidate *>space.softScratch.buf[SOFT_SCRATCH_CANDIDATES]
     ctx.candidateCap = space.softScratch.cap[SOFT_SCRATCH_CANDIDATES]
     ctx.candidateCount = 0
@@ -842,15 +867,20 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
     ctx.lanes = <SoftLanes *>_reserve(space, SOFT_SCRATCH_LANES, total, sizeof(SoftLanes))
     if ctx.lanes == NULL:
         return 0
+    # Where each contact goes (here, in order); the copying into the lanes
+    # after, on the pool.
     for i in range(n):
         c = color[i]
         if c == SOFT_GRAPH_COLORS:
+            color[i] = -1
             continue
         kind = ctx.contacts[i].count - 1
-        ln = &ctx.lanes[start[kind][c] + fill[kind][c] // SOFT_LANES]
-        ln.points = kind + 1
-        SoftPackLane(ctx, ln, fill[kind][c] % SOFT_LANES, i)
+        k = start[kind][c] * SOFT_LANES + fill[kind][c]
+        ctx.lanes[k // SOFT_LANES].points = kind + 1
+        color[i] = k
         fill[kind][c] += 1
+    ctx.laneSlots = color
+    SoftRun(ctx, SOFT_TASK_PACK, 0, n, 0)
     for c in range(SOFT_GRAPH_COLORS):
         for kind in range(2):
             # The last lane of a kind may be part empty.
@@ -859,6 +889,13 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
                 for k in range(fill[kind][c] % SOFT_LANES, SOFT_LANES):
                     SoftLanesClear(ln, k)
     return 1
+
+cdef void SoftPackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
+    cdef int i, slot
+    for i in range(begin, end):
+        slot = ctx.laneSlots[i]
+        if slot >= 0:
+            SoftPackLane(ctx, &ctx.lanes[slot // SOFT_LANES], slot % SOFT_LANES, i)
 
 cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, int k, int i) noexcept nogil:
     cdef SoftContact *sc = &ctx.contacts[i]
@@ -1344,6 +1381,8 @@ cdef enum:
     SOFT_TASK_UNPACK
     SOFT_TASK_STORE
     SOFT_TASK_FINISH_BODIES
+    SOFT_TASK_PACK
+    SOFT_TASK_UPDATE_SHAPES
 
 cdef enum:
     SOFT_CHUNK_LANES = 32         # lanes of contacts per chunk
@@ -1397,6 +1436,10 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
         SoftStoreImpulses(ctx, begin, end)
     elif task == SOFT_TASK_FINISH_BODIES:
         SoftFinishBodies(ctx, begin, end)
+    elif task == SOFT_TASK_PACK:
+        SoftPackLanes(ctx, begin, end)
+    elif task == SOFT_TASK_UPDATE_SHAPES:
+        SoftUpdateShapes(ctx, begin, end)
 
 cdef void SoftTakeChunks(bint caller) noexcept nogil:
     # The caller takes chunks from the front, the worker from the back: in
@@ -1423,9 +1466,10 @@ cdef void SoftRun(SoftContext *ctx, int task, int begin, int end, bint flag) noe
     # One stage over [begin, end): on the pool when the space is threaded
     # and the stage is big enough to share, else here.
     cdef int chunk = SOFT_CHUNK_LANES
-    if task <= SOFT_TASK_INTEGRATE_POSITIONS or task == SOFT_TASK_FINISH_BODIES:
+    if (task <= SOFT_TASK_INTEGRATE_POSITIONS or task == SOFT_TASK_FINISH_BODIES
+            or task == SOFT_TASK_UPDATE_SHAPES):
         chunk = SOFT_CHUNK_BODIES
-    elif task == SOFT_TASK_PREPARE or task == SOFT_TASK_STORE:
+    elif task == SOFT_TASK_PREPARE or task == SOFT_TASK_STORE or task == SOFT_TASK_PACK:
         chunk = SOFT_CHUNK_CONTACTS
     elif task == SOFT_TASK_NARROW:
         chunk = SOFT_CHUNK_PAIRS

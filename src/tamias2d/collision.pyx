@@ -635,7 +635,8 @@ cdef void CircleToPoly(const cpShape *a, const cpShape *b, cpCollisionInfo *info
 # Where two polygons' cores (their vertices, radius aside) overlap, the axis
 # of least penetration is a face normal of one of them: what EPA converges
 # to, found here with count1*count2 dot products and no iterations (Box2D's
-# polygon collider does the same for overlapping cores). Cores apart go to
+# polygon collider does the same for overlapping cores). Cores apart by more
+# than the margin along a face normal have no contact; closer, they go to
 # GJK as before, since their closest features may be two corners, which no
 # face normal describes. Not Munk2D's, so not the chipmunk solver's.
 
@@ -644,9 +645,9 @@ cdef enum:
     SEPARATING_AXES_MAX_WORK = 64
 
 cdef inline cpFloat PolyFaceSeparation(const cpPolyShape *ref, const cpPolyShape *inc,
-                                       int *face) noexcept nogil:
+                                       cpFloat stop, int *face) noexcept nogil:
     # The face of `ref` along whose normal `inc` reaches least far in, and how
-    # far out that is (negative: overlap). Stops at the first positive one.
+    # far out that is (negative: overlap). Stops at the first beyond `stop`.
     cdef cpFloat best = -INFINITY
     cdef cpFloat reach, x, sep
     cdef cpVect n
@@ -663,7 +664,7 @@ cdef inline cpFloat PolyFaceSeparation(const cpPolyShape *ref, const cpPolyShape
         if sep > best:
             best = sep
             face[0] = i
-            if sep > 0.0:
+            if sep > stop:
                 break
     return best
 
@@ -674,16 +675,23 @@ cdef void PolyToPolySeparatingAxes(const cpShape *a, const cpShape *b,
     cdef ClosestPoints points
     cdef int face1, face2
     cdef cpFloat sep1, sep2
+    # Apart by more than this along any axis: no contact within the margin
+    # (the distance is at least any axis's separation).
+    cdef cpFloat reach = info.margin + poly1.r + poly2.r
     if (poly1.count < 3 or poly2.count < 3
             or poly1.count * poly2.count > SEPARATING_AXES_MAX_WORK):
         # Degenerate polygons have no faces to test; big ones are GJK's.
         PolyToPoly(a, b, info)
         return
-    sep1 = PolyFaceSeparation(poly1, poly2, &face1)
+    sep1 = PolyFaceSeparation(poly1, poly2, reach, &face1)
+    if sep1 > reach:
+        return
     if sep1 > 0.0:
         PolyToPoly(a, b, info)
         return
-    sep2 = PolyFaceSeparation(poly2, poly1, &face2)
+    sep2 = PolyFaceSeparation(poly2, poly1, reach, &face2)
+    if sep2 > reach:
+        return
     if sep2 > 0.0:
         PolyToPoly(a, b, info)
         return
