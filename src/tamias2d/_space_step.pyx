@@ -270,8 +270,9 @@ cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID 
 # on the space's contact buffer): the persistent arbiter (`found` if the
 # caller looked it up already, else looked up or made here), begin and
 # pre-solve callbacks, the arbiter into this step's list. `updated`: the
-# caller ran cpArbiterUpdate on `found` already. Returns the arbiter (NULL
-# out of memory).
+# caller ran cpArbiterUpdate on `found` already, which it does only when no
+# handler acts on begin or pre-solve. Returns the arbiter (NULL out of
+# memory).
 cdef cpArbiter *cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
                                        cpCollisionInfo *info, cpArbiter *found,
                                        bint updated) noexcept nogil:
@@ -298,10 +299,11 @@ cdef cpArbiter *cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
         return arb
     if not updated:
         cpArbiterUpdate(arb, info, space)
-
-    if arb.state == CP_ARBITER_STATE_FIRST_COLLISION:
-        cpCallHandlers(arb, space, PHASE_BEGIN, True)
-    cpCallHandlers(arb, space, PHASE_PRE_SOLVE, True)
+        if arb.state == CP_ARBITER_STATE_FIRST_COLLISION:
+            cpCallHandlers(arb, space, PHASE_BEGIN, True)
+        cpCallHandlers(arb, space, PHASE_PRE_SOLVE, True)
+    # (Else no handler acts on begin or pre-solve, see `updated`: the calls
+    # would only flip `swapped` an even number of times.)
 
     if (arb.state != CP_ARBITER_STATE_IGNORE
             and arb.processCollision
