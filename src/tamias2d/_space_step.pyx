@@ -288,8 +288,8 @@ cdef cpArbiter *cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
         arbHashID = CP_HASH_PAIR(<cpHashValue>info.a, <cpHashValue>info.b)
         arb = <cpArbiter *>cpHashSetInsert(space.cachedArbiters, arbHashID, shape_pair,
                                            cpSpaceArbiterSetTrans, space)
-    if arb != NULL:
-        arb.cached = 1
+        if arb != NULL:
+            arb.cached = 1      # (a `found` arbiter came from the cache: set already)
     if arb == NULL or arb.stamp == space.stamp:
         # (Or the pair was handled already in this step: the spatial hash
         # reports a pair again when a callback runs a query in the middle of
