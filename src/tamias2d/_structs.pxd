@@ -269,11 +269,26 @@ ctypedef cpFloat (*cpConstraintGetImpulseImpl)(cpConstraint *constraint) noexcep
 ctypedef void (*cpConstraintPreSolveFunc)(cpConstraint *constraint, cpSpace *space) noexcept nogil
 ctypedef void (*cpConstraintPostSolveFunc)(cpConstraint *constraint, cpSpace *space) noexcept nogil
 
+# The soft solver's joints (constraints.pyx, called by _soft_step.pyx): a
+# joint's position error is corrected by a mass-spring-damper, as Box2D v3's
+# soft step does. softPreStep computes what preStep does but keeps the error
+# itself in the joint's `bias` field; softApplyImpulse turns it into a target
+# speed with the substep's softness (NULL: the relax pass, no correction).
+cdef struct cpSoftness:
+    cpFloat biasRate             # error -> target speed (1/s)
+    cpFloat massScale
+    cpFloat impulseScale
+
+ctypedef void (*cpConstraintSoftApplyImpulseImpl)(cpConstraint *constraint, cpFloat dt,
+                                                  const cpSoftness *soft) noexcept nogil
+
 cdef struct cpConstraintClass:
     cpConstraintPreStepImpl preStep
     cpConstraintApplyCachedImpulseImpl applyCachedImpulse
     cpConstraintApplyImpulseImpl applyImpulse
     cpConstraintGetImpulseImpl getImpulse
+    cpConstraintPreStepImpl softPreStep
+    cpConstraintSoftApplyImpulseImpl softApplyImpulse
 
 cdef struct cpConstraint:
     const cpConstraintClass *klass
@@ -345,6 +360,8 @@ cdef enum:
 cdef struct cpSoftSettings:
     cpFloat contactHertz         # contact stiffness (Hz)
     cpFloat contactDampingRatio  # contact damping ratio (1 = critical)
+    cpFloat jointHertz           # joint stiffness (Hz)
+    cpFloat jointDampingRatio    # joint damping ratio
     cpFloat pushOut              # max push-out speed, units/s (< 0: auto)
     cpFloat speculative          # speculative distance, units (< 0: auto)
     int solver                   # TAMIAS_SOLVER_*

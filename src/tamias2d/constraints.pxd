@@ -103,6 +103,7 @@ cdef struct cpRotaryLimitJoint:
     cpFloat iSum
     cpFloat bias
     cpFloat jAcc
+    cpFloat softSide  # the soft solver's nearer limit: +1 lower, -1 upper
 
 cdef struct cpRatchetJoint:
     cpConstraint constraint

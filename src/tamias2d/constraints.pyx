@@ -32,6 +32,7 @@ import weakref
 
 from tamias2d._config cimport cpFloat, cpBool, TAMIAS_FLOAT_0_9F
 from tamias2d._structs cimport (cpBody, cpShape, cpSpace, cpArray, cpConstraint, cpConstraintClass,
+    cpSoftness,
     CP_BODY_TYPE_DYNAMIC, CP_BODY_TYPE_KINEMATIC, CP_BODY_TYPE_STATIC)
 from tamias2d._containers cimport cpArrayDeleteObj
 from tamias2d.vector cimport (cpVect, cpMat2x2, cpTransform, cpv, cpvzero, cpveql, cpvadd,
@@ -81,39 +82,93 @@ cdef cpFloat cpConstraintGetImpulse(cpConstraint *constraint) noexcept nogil:
     return constraint.klass.getImpulse(constraint)
 
 
+# -- the soft solver's joints -------------------------------------------------------------------
+# Each joint has a second pre-step and impulse for the soft solver
+# (_soft_step.pyx), the way Box2D v3 solves its joints: the pre-step does
+# Chipmunk's geometry but keeps the position error itself in `bias` (the
+# quantity Chipmunk scales by -bias_coef/dt); the impulse turns it into a
+# target speed with the substep's softness, capped by max_bias, and softens
+# the effective mass. max_force caps the accumulated impulse as in Chipmunk;
+# error_bias is not used. A NULL softness is the relax pass: rigid, no
+# correction.
+#
+# The limits (slide joint, rotary limit, ratchet) are one-sided, and Box2D's
+# way with them is kept too: the nearer limit is solved even before it is
+# reached, speculatively (the bodies may close the gap C within the substep
+# and no further, target speed -C/h), so a body swinging into a limit stops
+# at it instead of overshooting for a substep; past it the spring pushes
+# back. Their `bias` holds C (negative past the limit).
+cdef cpSoftness _RIGID
+_RIGID.biasRate = 0.0
+_RIGID.massScale = 1.0
+_RIGID.impulseScale = 0.0
+
+cdef inline cpFloat _softBias(const cpSoftness *soft, cpFloat error, cpFloat maxBias) noexcept nogil:
+    # What Chipmunk's bias would be, from a spring instead of bias_coef.
+    return cpfclamp(-soft.biasRate * error, -maxBias, maxBias)
+
+cdef inline cpFloat _softLimitImpulse(const cpSoftness *soft, cpFloat gap, cpFloat gapSpeed,
+                                      cpFloat mass, cpFloat accumulated, cpFloat maxBias,
+                                      cpFloat h) noexcept nogil:
+    # The impulse (>= 0 pushes the gap open) that keeps a limit's gap from
+    # closing: speculative and rigid while open, soft once closed.
+    if gap > 0.0:
+        return -(gapSpeed + gap / h) * mass
+    if soft == NULL:
+        soft = &_RIGID
+    return (-soft.massScale * (gapSpeed + _softBias(soft, -gap, maxBias)) * mass
+            - soft.impulseScale * accumulated)
+
+
 # -- cpPinJoint.c ------------------------------------------------------------------------------
 cdef cpConstraintClass _pinJointClass
 
-cdef void _pinPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
-    cdef cpPinJoint *joint = <cpPinJoint *>c
-    cdef cpBody *a = c.a
-    cdef cpBody *b = c.b
+cdef inline cpFloat _pinGeometry(cpPinJoint *joint, cpBody *a, cpBody *b) noexcept nogil:
+    # Anchors, axis and effective mass; returns the anchors' distance.
     joint.r1 = cpTransformVect(a.transform, cpvsub(joint.anchorA, a.cog))
     joint.r2 = cpTransformVect(b.transform, cpvsub(joint.anchorB, b.cog))
     cdef cpVect delta = cpvsub(cpvadd(b.p, joint.r2), cpvadd(a.p, joint.r1))
     cdef cpFloat dist = cpvlength(delta)
     joint.n = cpvmult(delta, 1.0 / (dist if dist != 0.0 else INFINITY))
     joint.nMass = 1.0 / k_scalar(a, b, joint.r1, joint.r2, joint.n)
+    return dist
+
+cdef void _pinPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
+    cdef cpPinJoint *joint = <cpPinJoint *>c
+    cdef cpFloat dist = _pinGeometry(joint, c.a, c.b)
     cdef cpFloat maxBias = c.maxBias
     joint.bias = cpfclamp(-bias_coef(c.errorBias, dt) * (dist - joint.dist) / dt, -maxBias, maxBias)
+
+cdef void _pinSoftPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
+    cdef cpPinJoint *joint = <cpPinJoint *>c
+    joint.bias = _pinGeometry(joint, c.a, c.b) - joint.dist
 
 cdef void _pinApplyCachedImpulse(cpConstraint *c, cpFloat dt_coef) noexcept nogil:
     cdef cpPinJoint *joint = <cpPinJoint *>c
     cdef cpVect j = cpvmult(joint.n, joint.jnAcc * dt_coef)
     apply_impulses(c.a, c.b, joint.r1, joint.r2, j)
 
-cdef void _pinApplyImpulse(cpConstraint *c, cpFloat dt) noexcept nogil:
-    cdef cpPinJoint *joint = <cpPinJoint *>c
-    cdef cpBody *a = c.a
-    cdef cpBody *b = c.b
-    cdef cpVect n = joint.n
-    cdef cpFloat vrn = normal_relative_velocity(a, b, joint.r1, joint.r2, n)
+cdef inline void _pinAccumulate(cpConstraint *c, cpPinJoint *joint, cpFloat jn,
+                                cpFloat dt) noexcept nogil:
     cdef cpFloat jnMax = c.maxForce * dt
-    cdef cpFloat jn = (joint.bias - vrn) * joint.nMass
     cdef cpFloat jnOld = joint.jnAcc
     joint.jnAcc = cpfclamp(jnOld + jn, -jnMax, jnMax)
     jn = joint.jnAcc - jnOld
-    apply_impulses(a, b, joint.r1, joint.r2, cpvmult(n, jn))
+    apply_impulses(c.a, c.b, joint.r1, joint.r2, cpvmult(joint.n, jn))
+
+cdef void _pinApplyImpulse(cpConstraint *c, cpFloat dt) noexcept nogil:
+    cdef cpPinJoint *joint = <cpPinJoint *>c
+    cdef cpFloat vrn = normal_relative_velocity(c.a, c.b, joint.r1, joint.r2, joint.n)
+    _pinAccumulate(c, joint, (joint.bias - vrn) * joint.nMass, dt)
+
+cdef void _pinSoftApplyImpulse(cpConstraint *c, cpFloat dt, const cpSoftness *soft) noexcept nogil:
+    cdef cpPinJoint *joint = <cpPinJoint *>c
+    if soft == NULL:
+        soft = &_RIGID
+    cdef cpFloat vrn = normal_relative_velocity(c.a, c.b, joint.r1, joint.r2, joint.n)
+    cdef cpFloat bias = _softBias(soft, joint.bias, c.maxBias)
+    _pinAccumulate(c, joint, soft.massScale * (bias - vrn) * joint.nMass
+                   - soft.impulseScale * joint.jnAcc, dt)
 
 cdef cpFloat _pinGetImpulse(cpConstraint *c) noexcept nogil:
     return cpfabs((<cpPinJoint *>c).jnAcc)
@@ -122,6 +177,8 @@ _pinJointClass.preStep = _pinPreStep
 _pinJointClass.applyCachedImpulse = _pinApplyCachedImpulse
 _pinJointClass.applyImpulse = _pinApplyImpulse
 _pinJointClass.getImpulse = _pinGetImpulse
+_pinJointClass.softPreStep = _pinSoftPreStep
+_pinJointClass.softApplyImpulse = _pinSoftApplyImpulse
 
 cdef cpPinJoint *cpPinJointInit(cpPinJoint *joint, cpBody *a, cpBody *b,
                                 cpVect anchorA, cpVect anchorB) noexcept nogil:
@@ -143,10 +200,8 @@ cdef cpBool cpConstraintIsPinJoint(const cpConstraint *constraint) noexcept nogi
 # -- cpSlideJoint.c ------------------------------------------------------------------------------
 cdef cpConstraintClass _slideJointClass
 
-cdef void _slidePreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
-    cdef cpSlideJoint *joint = <cpSlideJoint *>c
-    cdef cpBody *a = c.a
-    cdef cpBody *b = c.b
+cdef inline cpFloat _slideGeometry(cpSlideJoint *joint, cpBody *a, cpBody *b) noexcept nogil:
+    # Anchors, axis and effective mass; returns how far past a limit.
     joint.r1 = cpTransformVect(a.transform, cpvsub(joint.anchorA, a.cog))
     joint.r2 = cpTransformVect(b.transform, cpvsub(joint.anchorB, b.cog))
     cdef cpVect delta = cpvsub(cpvadd(b.p, joint.r2), cpvadd(a.p, joint.r1))
@@ -162,28 +217,65 @@ cdef void _slidePreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
         joint.n = cpvzero()
         joint.jnAcc = 0.0
     joint.nMass = 1.0 / k_scalar(a, b, joint.r1, joint.r2, joint.n)
+    return pdist
+
+cdef void _slidePreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
+    cdef cpSlideJoint *joint = <cpSlideJoint *>c
+    cdef cpFloat pdist = _slideGeometry(joint, c.a, c.b)
     cdef cpFloat maxBias = c.maxBias
     joint.bias = cpfclamp(-bias_coef(c.errorBias, dt) * pdist / dt, -maxBias, maxBias)
+
+cdef void _slideSoftPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
+    # The nearer limit, whether reached or not; its gap in bias.
+    cdef cpSlideJoint *joint = <cpSlideJoint *>c
+    cdef cpBody *a = c.a
+    cdef cpBody *b = c.b
+    joint.r1 = cpTransformVect(a.transform, cpvsub(joint.anchorA, a.cog))
+    joint.r2 = cpTransformVect(b.transform, cpvsub(joint.anchorB, b.cog))
+    cdef cpVect delta = cpvsub(cpvadd(b.p, joint.r2), cpvadd(a.p, joint.r1))
+    cdef cpFloat dist = cpvlength(delta)
+    cdef cpVect n
+    if dist - joint.min < joint.max - dist:
+        joint.bias = dist - joint.min
+        n = cpvneg(cpvnormalize(delta))
+    else:
+        joint.bias = joint.max - dist
+        n = cpvnormalize(delta)
+    if cpvdot(n, joint.n) < 0.0:
+        joint.jnAcc = 0.0  # the other limit's impulse
+    joint.n = n
+    joint.nMass = 1.0 / k_scalar(a, b, joint.r1, joint.r2, n)
 
 cdef void _slideApplyCachedImpulse(cpConstraint *c, cpFloat dt_coef) noexcept nogil:
     cdef cpSlideJoint *joint = <cpSlideJoint *>c
     cdef cpVect j = cpvmult(joint.n, joint.jnAcc * dt_coef)
     apply_impulses(c.a, c.b, joint.r1, joint.r2, j)
 
+cdef inline void _slideAccumulate(cpConstraint *c, cpSlideJoint *joint, cpFloat jn,
+                                  cpFloat dt) noexcept nogil:
+    # A slide joint only pulls (or only pushes) along its axis.
+    cdef cpFloat jnOld = joint.jnAcc
+    joint.jnAcc = cpfclamp(jnOld + jn, -c.maxForce * dt, 0.0)
+    jn = joint.jnAcc - jnOld
+    apply_impulses(c.a, c.b, joint.r1, joint.r2, cpvmult(joint.n, jn))
+
 cdef void _slideApplyImpulse(cpConstraint *c, cpFloat dt) noexcept nogil:
     cdef cpSlideJoint *joint = <cpSlideJoint *>c
     if cpveql(joint.n, cpvzero()):
         return  # within the limits: nothing to do
-    cdef cpBody *a = c.a
-    cdef cpBody *b = c.b
-    cdef cpVect n = joint.n
-    cdef cpVect vr = relative_velocity(a, b, joint.r1, joint.r2)
-    cdef cpFloat vrn = cpvdot(vr, n)
-    cdef cpFloat jn = (joint.bias - vrn) * joint.nMass
-    cdef cpFloat jnOld = joint.jnAcc
-    joint.jnAcc = cpfclamp(jnOld + jn, -c.maxForce * dt, 0.0)
-    jn = joint.jnAcc - jnOld
-    apply_impulses(a, b, joint.r1, joint.r2, cpvmult(n, jn))
+    cdef cpVect vr = relative_velocity(c.a, c.b, joint.r1, joint.r2)
+    cdef cpFloat vrn = cpvdot(vr, joint.n)
+    _slideAccumulate(c, joint, (joint.bias - vrn) * joint.nMass, dt)
+
+cdef void _slideSoftApplyImpulse(cpConstraint *c, cpFloat dt, const cpSoftness *soft) noexcept nogil:
+    cdef cpSlideJoint *joint = <cpSlideJoint *>c
+    if cpveql(joint.n, cpvzero()):
+        return  # the anchors coincide: no axis
+    # (The joint's impulse along n is negative: it holds the gap.)
+    cdef cpVect vr = relative_velocity(c.a, c.b, joint.r1, joint.r2)
+    cdef cpFloat vrn = cpvdot(vr, joint.n)
+    _slideAccumulate(c, joint, -_softLimitImpulse(soft, joint.bias, -vrn, joint.nMass,
+                                                  -joint.jnAcc, c.maxBias, dt), dt)
 
 cdef cpFloat _slideGetImpulse(cpConstraint *c) noexcept nogil:
     return cpfabs((<cpSlideJoint *>c).jnAcc)
@@ -192,6 +284,8 @@ _slideJointClass.preStep = _slidePreStep
 _slideJointClass.applyCachedImpulse = _slideApplyCachedImpulse
 _slideJointClass.applyImpulse = _slideApplyImpulse
 _slideJointClass.getImpulse = _slideGetImpulse
+_slideJointClass.softPreStep = _slideSoftPreStep
+_slideJointClass.softApplyImpulse = _slideSoftApplyImpulse
 
 cdef cpSlideJoint *cpSlideJointInit(cpSlideJoint *joint, cpBody *a, cpBody *b, cpVect anchorA,
                                     cpVect anchorB, cpFloat min, cpFloat max) noexcept nogil:
@@ -210,30 +304,52 @@ cdef cpBool cpConstraintIsSlideJoint(const cpConstraint *constraint) noexcept no
 # -- cpPivotJoint.c ------------------------------------------------------------------------------
 cdef cpConstraintClass _pivotJointClass
 
-cdef void _pivotPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
-    cdef cpPivotJoint *joint = <cpPivotJoint *>c
-    cdef cpBody *a = c.a
-    cdef cpBody *b = c.b
+cdef inline cpVect _pivotGeometry(cpPivotJoint *joint, cpBody *a, cpBody *b) noexcept nogil:
+    # Anchors and mass tensor; returns the anchors' separation.
     joint.r1 = cpTransformVect(a.transform, cpvsub(joint.anchorA, a.cog))
     joint.r2 = cpTransformVect(b.transform, cpvsub(joint.anchorB, b.cog))
     joint.k = k_tensor(a, b, joint.r1, joint.r2)
-    cdef cpVect delta = cpvsub(cpvadd(b.p, joint.r2), cpvadd(a.p, joint.r1))
+    return cpvsub(cpvadd(b.p, joint.r2), cpvadd(a.p, joint.r1))
+
+cdef void _pivotPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
+    cdef cpPivotJoint *joint = <cpPivotJoint *>c
+    cdef cpVect delta = _pivotGeometry(joint, c.a, c.b)
     joint.bias = cpvclamp(cpvmult(delta, -bias_coef(c.errorBias, dt) / dt), c.maxBias)
+
+cdef void _pivotSoftPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
+    cdef cpPivotJoint *joint = <cpPivotJoint *>c
+    joint.bias = _pivotGeometry(joint, c.a, c.b)
 
 cdef void _pivotApplyCachedImpulse(cpConstraint *c, cpFloat dt_coef) noexcept nogil:
     cdef cpPivotJoint *joint = <cpPivotJoint *>c
     apply_impulses(c.a, c.b, joint.r1, joint.r2, cpvmult(joint.jAcc, dt_coef))
 
-cdef void _pivotApplyImpulse(cpConstraint *c, cpFloat dt) noexcept nogil:
-    cdef cpPivotJoint *joint = <cpPivotJoint *>c
-    cdef cpBody *a = c.a
-    cdef cpBody *b = c.b
-    cdef cpVect vr = relative_velocity(a, b, joint.r1, joint.r2)
-    cdef cpVect j = cpMat2x2Transform(joint.k, cpvsub(joint.bias, vr))
+cdef inline void _pivotAccumulate(cpConstraint *c, cpPivotJoint *joint, cpVect j,
+                                  cpFloat dt) noexcept nogil:
     cdef cpVect jOld = joint.jAcc
     joint.jAcc = cpvclamp(cpvadd(joint.jAcc, j), c.maxForce * dt)
     j = cpvsub(joint.jAcc, jOld)
-    apply_impulses(a, b, joint.r1, joint.r2, j)
+    apply_impulses(c.a, c.b, joint.r1, joint.r2, j)
+
+cdef inline cpVect _softVectImpulse(const cpSoftness *soft, cpMat2x2 k, cpVect error,
+                                    cpFloat maxBias, cpVect vr, cpVect acc) noexcept nogil:
+    # The soft impulse of a point constraint (pivot, groove).
+    if soft == NULL:
+        return cpMat2x2Transform(k, cpvneg(vr))
+    cdef cpVect bias = cpvclamp(cpvmult(error, -soft.biasRate), maxBias)
+    return cpvsub(cpvmult(cpMat2x2Transform(k, cpvsub(bias, vr)), soft.massScale),
+                  cpvmult(acc, soft.impulseScale))
+
+cdef void _pivotApplyImpulse(cpConstraint *c, cpFloat dt) noexcept nogil:
+    cdef cpPivotJoint *joint = <cpPivotJoint *>c
+    cdef cpVect vr = relative_velocity(c.a, c.b, joint.r1, joint.r2)
+    _pivotAccumulate(c, joint, cpMat2x2Transform(joint.k, cpvsub(joint.bias, vr)), dt)
+
+cdef void _pivotSoftApplyImpulse(cpConstraint *c, cpFloat dt, const cpSoftness *soft) noexcept nogil:
+    cdef cpPivotJoint *joint = <cpPivotJoint *>c
+    cdef cpVect vr = relative_velocity(c.a, c.b, joint.r1, joint.r2)
+    _pivotAccumulate(c, joint, _softVectImpulse(soft, joint.k, joint.bias, c.maxBias, vr,
+                                                joint.jAcc), dt)
 
 cdef cpFloat _pivotGetImpulse(cpConstraint *c) noexcept nogil:
     return cpvlength((<cpPivotJoint *>c).jAcc)
@@ -242,6 +358,8 @@ _pivotJointClass.preStep = _pivotPreStep
 _pivotJointClass.applyCachedImpulse = _pivotApplyCachedImpulse
 _pivotJointClass.applyImpulse = _pivotApplyImpulse
 _pivotJointClass.getImpulse = _pivotGetImpulse
+_pivotJointClass.softPreStep = _pivotSoftPreStep
+_pivotJointClass.softApplyImpulse = _pivotSoftApplyImpulse
 
 cdef cpPivotJoint *cpPivotJointInit(cpPivotJoint *joint, cpBody *a, cpBody *b,
                                     cpVect anchorA, cpVect anchorB) noexcept nogil:
@@ -258,10 +376,8 @@ cdef cpBool cpConstraintIsPivotJoint(const cpConstraint *constraint) noexcept no
 # -- cpGrooveJoint.c -------------------------------------------------------------------------------
 cdef cpConstraintClass _grooveJointClass
 
-cdef void _groovePreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
-    cdef cpGrooveJoint *joint = <cpGrooveJoint *>c
-    cdef cpBody *a = c.a
-    cdef cpBody *b = c.b
+cdef inline cpVect _grooveGeometry(cpGrooveJoint *joint, cpBody *a, cpBody *b) noexcept nogil:
+    # Anchors, clamping side and mass tensor; returns the anchors' separation.
     # The groove's end points and axis in world coordinates.
     cdef cpVect ta = cpTransformPoint(a.transform, joint.grv_a)
     cdef cpVect tb = cpTransformPoint(a.transform, joint.grv_b)
@@ -281,8 +397,16 @@ cdef void _groovePreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
         joint.clamp = 0.0
         joint.r1 = cpvsub(cpvadd(cpvmult(cpvperp(n), -td), cpvmult(n, d)), a.p)
     joint.k = k_tensor(a, b, joint.r1, joint.r2)
-    cdef cpVect delta = cpvsub(cpvadd(b.p, joint.r2), cpvadd(a.p, joint.r1))
+    return cpvsub(cpvadd(b.p, joint.r2), cpvadd(a.p, joint.r1))
+
+cdef void _groovePreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
+    cdef cpGrooveJoint *joint = <cpGrooveJoint *>c
+    cdef cpVect delta = _grooveGeometry(joint, c.a, c.b)
     joint.bias = cpvclamp(cpvmult(delta, -bias_coef(c.errorBias, dt) / dt), c.maxBias)
+
+cdef void _grooveSoftPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
+    cdef cpGrooveJoint *joint = <cpGrooveJoint *>c
+    joint.bias = _grooveGeometry(joint, c.a, c.b)
 
 cdef void _grooveApplyCachedImpulse(cpConstraint *c, cpFloat dt_coef) noexcept nogil:
     cdef cpGrooveJoint *joint = <cpGrooveJoint *>c
@@ -293,16 +417,22 @@ cdef inline cpVect _grooveConstrain(cpGrooveJoint *joint, cpVect j, cpFloat dt) 
     cdef cpVect jClamp = j if joint.clamp * cpvcross(j, n) > 0.0 else cpvproject(j, n)
     return cpvclamp(jClamp, joint.constraint.maxForce * dt)
 
-cdef void _grooveApplyImpulse(cpConstraint *c, cpFloat dt) noexcept nogil:
-    cdef cpGrooveJoint *joint = <cpGrooveJoint *>c
-    cdef cpBody *a = c.a
-    cdef cpBody *b = c.b
-    cdef cpVect vr = relative_velocity(a, b, joint.r1, joint.r2)
-    cdef cpVect j = cpMat2x2Transform(joint.k, cpvsub(joint.bias, vr))
+cdef inline void _grooveAccumulate(cpGrooveJoint *joint, cpVect j, cpFloat dt) noexcept nogil:
     cdef cpVect jOld = joint.jAcc
     joint.jAcc = _grooveConstrain(joint, cpvadd(jOld, j), dt)
     j = cpvsub(joint.jAcc, jOld)
-    apply_impulses(a, b, joint.r1, joint.r2, j)
+    apply_impulses(joint.constraint.a, joint.constraint.b, joint.r1, joint.r2, j)
+
+cdef void _grooveApplyImpulse(cpConstraint *c, cpFloat dt) noexcept nogil:
+    cdef cpGrooveJoint *joint = <cpGrooveJoint *>c
+    cdef cpVect vr = relative_velocity(c.a, c.b, joint.r1, joint.r2)
+    _grooveAccumulate(joint, cpMat2x2Transform(joint.k, cpvsub(joint.bias, vr)), dt)
+
+cdef void _grooveSoftApplyImpulse(cpConstraint *c, cpFloat dt, const cpSoftness *soft) noexcept nogil:
+    cdef cpGrooveJoint *joint = <cpGrooveJoint *>c
+    cdef cpVect vr = relative_velocity(c.a, c.b, joint.r1, joint.r2)
+    _grooveAccumulate(joint, _softVectImpulse(soft, joint.k, joint.bias, c.maxBias, vr,
+                                              joint.jAcc), dt)
 
 cdef cpFloat _grooveGetImpulse(cpConstraint *c) noexcept nogil:
     return cpvlength((<cpGrooveJoint *>c).jAcc)
@@ -311,6 +441,8 @@ _grooveJointClass.preStep = _groovePreStep
 _grooveJointClass.applyCachedImpulse = _grooveApplyCachedImpulse
 _grooveJointClass.applyImpulse = _grooveApplyImpulse
 _grooveJointClass.getImpulse = _grooveGetImpulse
+_grooveJointClass.softPreStep = _grooveSoftPreStep
+_grooveJointClass.softApplyImpulse = _grooveSoftApplyImpulse
 
 cdef cpGrooveJoint *cpGrooveJointInit(cpGrooveJoint *joint, cpBody *a, cpBody *b,
                                       cpVect groove_a, cpVect groove_b, cpVect anchorB) noexcept nogil:
@@ -375,10 +507,16 @@ cdef void _springApplyImpulse(cpConstraint *c, cpFloat dt) noexcept nogil:
 cdef cpFloat _springGetImpulse(cpConstraint *c) noexcept nogil:
     return (<cpDampedSpring *>c).jAcc
 
+cdef void _springSoftApplyImpulse(cpConstraint *c, cpFloat dt, const cpSoftness *soft) noexcept nogil:
+    _springApplyImpulse(c, dt)
+
 _dampedSpringClass.preStep = _springPreStep
 _dampedSpringClass.applyCachedImpulse = _springApplyCachedImpulse
 _dampedSpringClass.applyImpulse = _springApplyImpulse
 _dampedSpringClass.getImpulse = _springGetImpulse
+# No position error to correct: the soft solver runs Chipmunk's own step.
+_dampedSpringClass.softPreStep = _springPreStep
+_dampedSpringClass.softApplyImpulse = _springSoftApplyImpulse
 
 cdef cpDampedSpring *cpDampedSpringInit(cpDampedSpring *spring, cpBody *a, cpBody *b,
                                         cpVect anchorA, cpVect anchorB, cpFloat restLength,
@@ -441,10 +579,16 @@ cdef void _rotarySpringApplyImpulse(cpConstraint *c, cpFloat dt) noexcept nogil:
 cdef cpFloat _rotarySpringGetImpulse(cpConstraint *c) noexcept nogil:
     return (<cpDampedRotarySpring *>c).jAcc
 
+cdef void _rotarySpringSoftApplyImpulse(cpConstraint *c, cpFloat dt, const cpSoftness *soft) noexcept nogil:
+    _rotarySpringApplyImpulse(c, dt)
+
 _dampedRotarySpringClass.preStep = _rotarySpringPreStep
 _dampedRotarySpringClass.applyCachedImpulse = _rotarySpringApplyCachedImpulse
 _dampedRotarySpringClass.applyImpulse = _rotarySpringApplyImpulse
 _dampedRotarySpringClass.getImpulse = _rotarySpringGetImpulse
+# No position error to correct: the soft solver runs Chipmunk's own step.
+_dampedRotarySpringClass.softPreStep = _rotarySpringPreStep
+_dampedRotarySpringClass.softApplyImpulse = _rotarySpringSoftApplyImpulse
 
 cdef cpDampedRotarySpring *cpDampedRotarySpringInit(cpDampedRotarySpring *spring, cpBody *a,
         cpBody *b, cpFloat restAngle, cpFloat stiffness, cpFloat damping) noexcept nogil:
@@ -463,10 +607,9 @@ cdef cpBool cpConstraintIsDampedRotarySpring(const cpConstraint *constraint) noe
 # -- cpRotaryLimitJoint.c -------------------------------------------------------------------------
 cdef cpConstraintClass _rotaryLimitJointClass
 
-cdef void _rotaryLimitPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
-    cdef cpRotaryLimitJoint *joint = <cpRotaryLimitJoint *>c
-    cdef cpBody *a = c.a
-    cdef cpBody *b = c.b
+cdef inline cpFloat _rotaryLimitGeometry(cpRotaryLimitJoint *joint, cpBody *a,
+                                       cpBody *b) noexcept nogil:
+    # The moment; returns how far past a limit (signed).
     cdef cpFloat dist = b.a - a.a
     cdef cpFloat pdist = 0.0
     if dist > joint.max:
@@ -474,11 +617,31 @@ cdef void _rotaryLimitPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
     elif dist < joint.min:
         pdist = joint.min - dist
     joint.iSum = 1.0 / (a.i_inv + b.i_inv)
+    return pdist
+
+cdef void _rotaryLimitPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
+    cdef cpRotaryLimitJoint *joint = <cpRotaryLimitJoint *>c
+    cdef cpFloat pdist = _rotaryLimitGeometry(joint, c.a, c.b)
     cdef cpFloat maxBias = c.maxBias
     joint.bias = cpfclamp(-bias_coef(c.errorBias, dt) * pdist / dt, -maxBias, maxBias)
     # Not at a limit: forget the accumulated impulse.
     if joint.bias == 0.0:
         joint.jAcc = 0.0
+
+cdef void _rotaryLimitSoftPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
+    # The nearer limit, whether reached or not: its side (+1 the lower
+    # limit, -1 the upper) and its gap in bias.
+    cdef cpRotaryLimitJoint *joint = <cpRotaryLimitJoint *>c
+    cdef cpFloat dist = c.b.a - c.a.a
+    if dist - joint.min < joint.max - dist:
+        joint.softSide = 1.0
+        joint.bias = dist - joint.min
+    else:
+        joint.softSide = -1.0
+        joint.bias = joint.max - dist
+    if joint.softSide * joint.jAcc < 0.0:
+        joint.jAcc = 0.0  # the other limit's impulse
+    joint.iSum = 1.0 / (c.a.i_inv + c.b.i_inv)
 
 cdef void _rotaryLimitApplyCachedImpulse(cpConstraint *c, cpFloat dt_coef) noexcept nogil:
     cdef cpRotaryLimitJoint *joint = <cpRotaryLimitJoint *>c
@@ -486,23 +649,33 @@ cdef void _rotaryLimitApplyCachedImpulse(cpConstraint *c, cpFloat dt_coef) noexc
     c.a.w -= j * c.a.i_inv
     c.b.w += j * c.b.i_inv
 
-cdef void _rotaryLimitApplyImpulse(cpConstraint *c, cpFloat dt) noexcept nogil:
-    cdef cpRotaryLimitJoint *joint = <cpRotaryLimitJoint *>c
-    if joint.bias == 0.0:
-        return  # not at a limit
-    cdef cpBody *a = c.a
-    cdef cpBody *b = c.b
-    cdef cpFloat wr = b.w - a.w
+cdef inline void _rotaryLimitAccumulate(cpConstraint *c, cpRotaryLimitJoint *joint, cpFloat j,
+                                        bint belowMin, cpFloat dt) noexcept nogil:
+    # At the lower limit the joint only pushes, at the upper one only pulls.
     cdef cpFloat jMax = c.maxForce * dt
-    cdef cpFloat j = -(joint.bias + wr) * joint.iSum
     cdef cpFloat jOld = joint.jAcc
-    if joint.bias < 0.0:
+    if belowMin:
         joint.jAcc = cpfclamp(jOld + j, 0.0, jMax)
     else:
         joint.jAcc = cpfclamp(jOld + j, -jMax, 0.0)
     j = joint.jAcc - jOld
-    a.w -= j * a.i_inv
-    b.w += j * b.i_inv
+    c.a.w -= j * c.a.i_inv
+    c.b.w += j * c.b.i_inv
+
+cdef void _rotaryLimitApplyImpulse(cpConstraint *c, cpFloat dt) noexcept nogil:
+    cdef cpRotaryLimitJoint *joint = <cpRotaryLimitJoint *>c
+    if joint.bias == 0.0:
+        return  # not at a limit
+    cdef cpFloat wr = c.b.w - c.a.w
+    _rotaryLimitAccumulate(c, joint, -(joint.bias + wr) * joint.iSum, joint.bias < 0.0, dt)
+
+cdef void _rotaryLimitSoftApplyImpulse(cpConstraint *c, cpFloat dt,
+                                       const cpSoftness *soft) noexcept nogil:
+    cdef cpRotaryLimitJoint *joint = <cpRotaryLimitJoint *>c
+    cdef cpFloat side = joint.softSide
+    cdef cpFloat j = _softLimitImpulse(soft, joint.bias, side * (c.b.w - c.a.w), joint.iSum,
+                                       side * joint.jAcc, c.maxBias, dt)
+    _rotaryLimitAccumulate(c, joint, side * j, side > 0.0, dt)
 
 cdef cpFloat _rotaryLimitGetImpulse(cpConstraint *c) noexcept nogil:
     return cpfabs((<cpRotaryLimitJoint *>c).jAcc)
@@ -511,6 +684,8 @@ _rotaryLimitJointClass.preStep = _rotaryLimitPreStep
 _rotaryLimitJointClass.applyCachedImpulse = _rotaryLimitApplyCachedImpulse
 _rotaryLimitJointClass.applyImpulse = _rotaryLimitApplyImpulse
 _rotaryLimitJointClass.getImpulse = _rotaryLimitGetImpulse
+_rotaryLimitJointClass.softPreStep = _rotaryLimitSoftPreStep
+_rotaryLimitJointClass.softApplyImpulse = _rotaryLimitSoftApplyImpulse
 
 cdef cpRotaryLimitJoint *cpRotaryLimitJointInit(cpRotaryLimitJoint *joint, cpBody *a, cpBody *b,
                                                 cpFloat min, cpFloat max) noexcept nogil:
@@ -518,6 +693,7 @@ cdef cpRotaryLimitJoint *cpRotaryLimitJointInit(cpRotaryLimitJoint *joint, cpBod
     joint.min = min
     joint.max = max
     joint.jAcc = 0.0
+    joint.softSide = 1.0
     return joint
 
 cdef cpBool cpConstraintIsRotaryLimitJoint(const cpConstraint *constraint) noexcept nogil:
@@ -527,10 +703,8 @@ cdef cpBool cpConstraintIsRotaryLimitJoint(const cpConstraint *constraint) noexc
 # -- cpRatchetJoint.c ---------------------------------------------------------------------------------
 cdef cpConstraintClass _ratchetJointClass
 
-cdef void _ratchetPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
-    cdef cpRatchetJoint *joint = <cpRatchetJoint *>c
-    cdef cpBody *a = c.a
-    cdef cpBody *b = c.b
+cdef inline cpFloat _ratchetGeometry(cpRatchetJoint *joint, cpBody *a, cpBody *b) noexcept nogil:
+    # The notch and the moment; returns how far back past the pawl.
     cdef cpFloat angle = joint.angle
     cdef cpFloat phase = joint.phase
     cdef cpFloat ratchet = joint.ratchet
@@ -543,10 +717,25 @@ cdef void _ratchetPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
         # Moved forward: the pawl drops into the next notch.
         joint.angle = floor((delta - phase) / ratchet) * ratchet + phase
     joint.iSum = 1.0 / (a.i_inv + b.i_inv)
+    return pdist
+
+cdef inline cpFloat _ratchetSign(cpRatchetJoint *joint) noexcept nogil:
+    return 1.0 if joint.ratchet > 0.0 else -1.0
+
+cdef void _ratchetPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
+    cdef cpRatchetJoint *joint = <cpRatchetJoint *>c
+    cdef cpFloat pdist = _ratchetGeometry(joint, c.a, c.b)
     cdef cpFloat maxBias = c.maxBias
     joint.bias = cpfclamp(-bias_coef(c.errorBias, dt) * pdist / dt, -maxBias, maxBias)
     if joint.bias == 0.0:
         joint.jAcc = 0.0
+
+cdef void _ratchetSoftPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
+    # The gap back to the pawl (after it drops into the next notch), in the
+    # ratchet's direction.
+    cdef cpRatchetJoint *joint = <cpRatchetJoint *>c
+    _ratchetGeometry(joint, c.a, c.b)
+    joint.bias = _ratchetSign(joint) * ((c.b.a - c.a.a) - joint.angle)
 
 cdef void _ratchetApplyCachedImpulse(cpConstraint *c, cpFloat dt_coef) noexcept nogil:
     cdef cpRatchetJoint *joint = <cpRatchetJoint *>c
@@ -554,21 +743,31 @@ cdef void _ratchetApplyCachedImpulse(cpConstraint *c, cpFloat dt_coef) noexcept 
     c.a.w -= j * c.a.i_inv
     c.b.w += j * c.b.i_inv
 
+cdef inline void _ratchetAccumulate(cpConstraint *c, cpRatchetJoint *joint, cpFloat j,
+                                    cpFloat dt) noexcept nogil:
+    # The pawl only pushes one way (the sign of ratchet).
+    cdef cpFloat ratchet = joint.ratchet
+    cdef cpFloat jMax = c.maxForce * dt
+    cdef cpFloat jOld = joint.jAcc
+    joint.jAcc = cpfclamp((jOld + j) * ratchet, 0.0, jMax * cpfabs(ratchet)) / ratchet
+    j = joint.jAcc - jOld
+    c.a.w -= j * c.a.i_inv
+    c.b.w += j * c.b.i_inv
+
 cdef void _ratchetApplyImpulse(cpConstraint *c, cpFloat dt) noexcept nogil:
     cdef cpRatchetJoint *joint = <cpRatchetJoint *>c
     if joint.bias == 0.0:
         return  # not pushing against the pawl
-    cdef cpBody *a = c.a
-    cdef cpBody *b = c.b
-    cdef cpFloat wr = b.w - a.w
-    cdef cpFloat ratchet = joint.ratchet
-    cdef cpFloat jMax = c.maxForce * dt
-    cdef cpFloat j = -(joint.bias + wr) * joint.iSum
-    cdef cpFloat jOld = joint.jAcc
-    joint.jAcc = cpfclamp((jOld + j) * ratchet, 0.0, jMax * cpfabs(ratchet)) / ratchet
-    j = joint.jAcc - jOld
-    a.w -= j * a.i_inv
-    b.w += j * b.i_inv
+    cdef cpFloat wr = c.b.w - c.a.w
+    _ratchetAccumulate(c, joint, -(joint.bias + wr) * joint.iSum, dt)
+
+cdef void _ratchetSoftApplyImpulse(cpConstraint *c, cpFloat dt,
+                                   const cpSoftness *soft) noexcept nogil:
+    cdef cpRatchetJoint *joint = <cpRatchetJoint *>c
+    cdef cpFloat side = _ratchetSign(joint)
+    cdef cpFloat j = _softLimitImpulse(soft, joint.bias, side * (c.b.w - c.a.w), joint.iSum,
+                                       side * joint.jAcc, c.maxBias, dt)
+    _ratchetAccumulate(c, joint, side * j, dt)
 
 cdef cpFloat _ratchetGetImpulse(cpConstraint *c) noexcept nogil:
     return cpfabs((<cpRatchetJoint *>c).jAcc)
@@ -577,6 +776,8 @@ _ratchetJointClass.preStep = _ratchetPreStep
 _ratchetJointClass.applyCachedImpulse = _ratchetApplyCachedImpulse
 _ratchetJointClass.applyImpulse = _ratchetApplyImpulse
 _ratchetJointClass.getImpulse = _ratchetGetImpulse
+_ratchetJointClass.softPreStep = _ratchetSoftPreStep
+_ratchetJointClass.softApplyImpulse = _ratchetSoftApplyImpulse
 
 cdef cpRatchetJoint *cpRatchetJointInit(cpRatchetJoint *joint, cpBody *a, cpBody *b,
                                         cpFloat phase, cpFloat ratchet) noexcept nogil:
@@ -594,14 +795,20 @@ cdef cpBool cpConstraintIsRatchetJoint(const cpConstraint *constraint) noexcept 
 # -- cpGearJoint.c ---------------------------------------------------------------------------------------
 cdef cpConstraintClass _gearJointClass
 
+cdef inline cpFloat _gearGeometry(cpGearJoint *joint, cpBody *a, cpBody *b) noexcept nogil:
+    # The moment; returns the angle error.
+    joint.iSum = 1.0 / (a.i_inv * joint.ratio_inv + joint.ratio * b.i_inv)
+    return b.a * joint.ratio - a.a - joint.phase
+
 cdef void _gearPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
     cdef cpGearJoint *joint = <cpGearJoint *>c
-    cdef cpBody *a = c.a
-    cdef cpBody *b = c.b
-    joint.iSum = 1.0 / (a.i_inv * joint.ratio_inv + joint.ratio * b.i_inv)
+    cdef cpFloat error = _gearGeometry(joint, c.a, c.b)
     cdef cpFloat maxBias = c.maxBias
-    joint.bias = cpfclamp(-bias_coef(c.errorBias, dt) * (b.a * joint.ratio - a.a - joint.phase) / dt,
-                          -maxBias, maxBias)
+    joint.bias = cpfclamp(-bias_coef(c.errorBias, dt) * error / dt, -maxBias, maxBias)
+
+cdef void _gearSoftPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
+    cdef cpGearJoint *joint = <cpGearJoint *>c
+    joint.bias = _gearGeometry(joint, c.a, c.b)
 
 cdef void _gearApplyCachedImpulse(cpConstraint *c, cpFloat dt_coef) noexcept nogil:
     cdef cpGearJoint *joint = <cpGearJoint *>c
@@ -609,18 +816,28 @@ cdef void _gearApplyCachedImpulse(cpConstraint *c, cpFloat dt_coef) noexcept nog
     c.a.w -= j * c.a.i_inv * joint.ratio_inv
     c.b.w += j * c.b.i_inv
 
-cdef void _gearApplyImpulse(cpConstraint *c, cpFloat dt) noexcept nogil:
-    cdef cpGearJoint *joint = <cpGearJoint *>c
-    cdef cpBody *a = c.a
-    cdef cpBody *b = c.b
-    cdef cpFloat wr = b.w * joint.ratio - a.w
+cdef inline void _gearAccumulate(cpConstraint *c, cpGearJoint *joint, cpFloat j,
+                                 cpFloat dt) noexcept nogil:
     cdef cpFloat jMax = c.maxForce * dt
-    cdef cpFloat j = (joint.bias - wr) * joint.iSum
     cdef cpFloat jOld = joint.jAcc
     joint.jAcc = cpfclamp(jOld + j, -jMax, jMax)
     j = joint.jAcc - jOld
-    a.w -= j * a.i_inv * joint.ratio_inv
-    b.w += j * b.i_inv
+    c.a.w -= j * c.a.i_inv * joint.ratio_inv
+    c.b.w += j * c.b.i_inv
+
+cdef void _gearApplyImpulse(cpConstraint *c, cpFloat dt) noexcept nogil:
+    cdef cpGearJoint *joint = <cpGearJoint *>c
+    cdef cpFloat wr = c.b.w * joint.ratio - c.a.w
+    _gearAccumulate(c, joint, (joint.bias - wr) * joint.iSum, dt)
+
+cdef void _gearSoftApplyImpulse(cpConstraint *c, cpFloat dt, const cpSoftness *soft) noexcept nogil:
+    cdef cpGearJoint *joint = <cpGearJoint *>c
+    if soft == NULL:
+        soft = &_RIGID
+    cdef cpFloat wr = c.b.w * joint.ratio - c.a.w
+    cdef cpFloat bias = _softBias(soft, joint.bias, c.maxBias)
+    _gearAccumulate(c, joint, soft.massScale * (bias - wr) * joint.iSum
+                    - soft.impulseScale * joint.jAcc, dt)
 
 cdef cpFloat _gearGetImpulse(cpConstraint *c) noexcept nogil:
     return cpfabs((<cpGearJoint *>c).jAcc)
@@ -629,6 +846,8 @@ _gearJointClass.preStep = _gearPreStep
 _gearJointClass.applyCachedImpulse = _gearApplyCachedImpulse
 _gearJointClass.applyImpulse = _gearApplyImpulse
 _gearJointClass.getImpulse = _gearGetImpulse
+_gearJointClass.softPreStep = _gearSoftPreStep
+_gearJointClass.softApplyImpulse = _gearSoftApplyImpulse
 
 cdef cpGearJoint *cpGearJointInit(cpGearJoint *joint, cpBody *a, cpBody *b,
                                   cpFloat phase, cpFloat ratio) noexcept nogil:
@@ -672,10 +891,16 @@ cdef void _motorApplyImpulse(cpConstraint *c, cpFloat dt) noexcept nogil:
 cdef cpFloat _motorGetImpulse(cpConstraint *c) noexcept nogil:
     return cpfabs((<cpSimpleMotor *>c).jAcc)
 
+cdef void _motorSoftApplyImpulse(cpConstraint *c, cpFloat dt, const cpSoftness *soft) noexcept nogil:
+    _motorApplyImpulse(c, dt)
+
 _simpleMotorClass.preStep = _motorPreStep
 _simpleMotorClass.applyCachedImpulse = _motorApplyCachedImpulse
 _simpleMotorClass.applyImpulse = _motorApplyImpulse
 _simpleMotorClass.getImpulse = _motorGetImpulse
+# No position error to correct: the soft solver runs Chipmunk's own step.
+_simpleMotorClass.softPreStep = _motorPreStep
+_simpleMotorClass.softApplyImpulse = _motorSoftApplyImpulse
 
 cdef cpSimpleMotor *cpSimpleMotorInit(cpSimpleMotor *joint, cpBody *a, cpBody *b,
                                       cpFloat rate) noexcept nogil:
