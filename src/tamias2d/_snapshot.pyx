@@ -140,7 +140,7 @@ cdef struct ContactBuffer:
     cpContactBufferHeader header
     cpContact contacts[CONTACTS_PER_BUFFER]
 
-DEF FORMAT_VERSION = 2
+DEF FORMAT_VERSION = 3
 
 # Records. Only 8- and 4-byte fields, widest first, so there is no padding.
 
@@ -151,6 +151,8 @@ DEF FORMAT_VERSION = 2
 cdef struct SoftRec:
     cpFloat contactHertz
     cpFloat contactDampingRatio
+    cpFloat jointHertz
+    cpFloat jointDampingRatio
     cpFloat pushOut
     cpFloat speculative
     int32_t solver
@@ -1154,6 +1156,8 @@ cdef int _write_soft(Writer *w, const cpSpace *space) except -1:
     memset(&rec, 0, sizeof(SoftRec))
     rec.contactHertz = space.soft.contactHertz
     rec.contactDampingRatio = space.soft.contactDampingRatio
+    rec.jointHertz = space.soft.jointHertz
+    rec.jointDampingRatio = space.soft.jointDampingRatio
     rec.pushOut = space.soft.pushOut
     rec.speculative = space.soft.speculative
     rec.solver = space.soft.solver
@@ -1176,6 +1180,10 @@ cdef int _read_soft(Reader *r, Parsed *p) except -1:
         _bad(f"contact_hertz {rec.contactHertz} is not a finite number >= 0")
     if not (_fin(rec.contactDampingRatio) and rec.contactDampingRatio >= 0.0):
         _bad(f"contact_damping_ratio {rec.contactDampingRatio} is not a finite number >= 0")
+    if not (_fin(rec.jointHertz) and rec.jointHertz >= 0.0):
+        _bad(f"joint_hertz {rec.jointHertz} is not a finite number >= 0")
+    if not (_fin(rec.jointDampingRatio) and rec.jointDampingRatio >= 0.0):
+        _bad(f"joint_damping_ratio {rec.jointDampingRatio} is not a finite number >= 0")
     # -1 is "derived from collision_slop" (the setters' None).
     if not (rec.pushOut == -1.0 or (_fin(rec.pushOut) and rec.pushOut >= 0.0)):
         _bad(f"contact_push_out {rec.pushOut} is not a finite number >= 0")
@@ -1186,6 +1194,8 @@ cdef int _read_soft(Reader *r, Parsed *p) except -1:
 cdef void _link_soft(cpSpace *space, Parsed *p) noexcept nogil:
     space.soft.contactHertz = p.soft.contactHertz
     space.soft.contactDampingRatio = p.soft.contactDampingRatio
+    space.soft.jointHertz = p.soft.jointHertz
+    space.soft.jointDampingRatio = p.soft.jointDampingRatio
     space.soft.pushOut = p.soft.pushOut
     space.soft.speculative = p.soft.speculative
     space.soft.solver = p.soft.solver

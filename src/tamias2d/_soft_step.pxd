@@ -28,7 +28,8 @@
 #   * SoftFinishBodies, SoftFinishJoints
 #   StagePostSolve, unlock (post-step callbacks)            (shared)
 from tamias2d._config cimport cpFloat, cpBool
-from tamias2d._structs cimport cpSpace, cpBody, cpArbiter, cpSoftSettings, cpSoftScratch
+from tamias2d._structs cimport (cpSpace, cpBody, cpArbiter, cpSoftSettings, cpSoftScratch,
+    cpSoftness)
 from tamias2d.vector cimport cpVect
 
 # Defaults (DESIGN.md "Two solvers"; Box2D v3's values, lengths expressed in
@@ -37,6 +38,9 @@ cdef enum:
     SOFT_DEFAULT_SUBSTEPS = 4
 cdef const cpFloat SOFT_DEFAULT_CONTACT_HERTZ = 30.0
 cdef const cpFloat SOFT_DEFAULT_CONTACT_DAMPING_RATIO = 10.0
+# Joints: Box2D v3's world defaults (jointHertz, jointDampingRatio).
+cdef const cpFloat SOFT_DEFAULT_JOINT_HERTZ = 60.0
+cdef const cpFloat SOFT_DEFAULT_JOINT_DAMPING_RATIO = 2.0
 # Max push-out speed = this x collision_slop per second (60 units/s for the
 # default slop 0.1; Box2D's 3 m/s is 600 of its 0.005 m slops per second).
 cdef const cpFloat SOFT_PUSH_OUT_PER_SLOP = 600.0
@@ -164,10 +168,8 @@ cdef struct SoftContact:
     cpArbiter *arb
 
 # b2MakeSoft: stiffness `hertz` and damping ratio `zeta` at step h.
-cdef struct SoftSoftness:
-    cpFloat biasRate
-    cpFloat massScale
-    cpFloat impulseScale
+# A soft constraint's coefficients (the same struct the joints take).
+ctypedef cpSoftness SoftSoftness
 
 cdef SoftSoftness SoftMakeSoft(cpFloat hertz, cpFloat zeta, cpFloat h) noexcept nogil
 

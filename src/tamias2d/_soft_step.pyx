@@ -73,6 +73,8 @@ cdef void SoftSettingsInit(cpSoftSettings *settings) noexcept nogil:
     settings.threads = 1
     settings.contactHertz = SOFT_DEFAULT_CONTACT_HERTZ
     settings.contactDampingRatio = SOFT_DEFAULT_CONTACT_DAMPING_RATIO
+    settings.jointHertz = SOFT_DEFAULT_JOINT_HERTZ
+    settings.jointDampingRatio = SOFT_DEFAULT_JOINT_DAMPING_RATIO
     settings.pushOut = -1.0
     settings.speculative = -1.0
 
@@ -196,6 +198,7 @@ cdef struct SoftContext:
     cpFloat pushOut
     SoftSoftness contactSoft  # between two movable bodies
     SoftSoftness staticSoft   # against an immovable one (twice as stiff)
+    SoftSoftness jointSoft    # the joints' position correction
 
 cdef inline int SoftIndex(cpBody *body, SoftBody *bodies, int count) noexcept nogil:
     # The slot of an awake body, or 0 (static, sleeping, removed).
@@ -484,10 +487,13 @@ cdef bint SoftGatherBodies(SoftContext *ctx) noexcept nogil:
 
 
 # -- joints ------------------------------------------------------------------------------
-# The joints are Chipmunk's own, stepped with the substep h: preStep,
-# applyCachedImpulse and applyImpulse work on the cpBody structs, so the
-# bodies they touch are written out of the arrays before and read back after
-# (only those: the contact loops never leave the arrays).
+# The joints are soft constraints, as Box2D v3's: each substep their
+# softPreStep measures the position error, applyCachedImpulse warm starts,
+# softApplyImpulse solves with the joint softness (and rigidly, without
+# correction, in the relax pass). Springs and the motor keep Chipmunk's step.
+# These work on the cpBody structs (constraints.pyx), so the bodies they
+# touch are written out of the arrays before and read back after (only
+# those: the contact loops never leave the arrays).
 
 cdef bint SoftPrepareJoints(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     cdef cpSpace *space = ctx.space
@@ -550,22 +556,23 @@ cdef void SoftJointsWarmStart(SoftContext *ctx) noexcept nogil:
     SoftScatterJointBodies(ctx)
     for i in range(constraints.num):
         c = <cpConstraint *>constraints.arr[i]
-        c.klass.preStep(c, ctx.h)
+        c.klass.softPreStep(c, ctx.h)
     for i in range(constraints.num):
         c = <cpConstraint *>constraints.arr[i]
         c.klass.applyCachedImpulse(c, 1.0)
     SoftGatherJointBodies(ctx)
 
-cdef void SoftJointsSolve(SoftContext *ctx) noexcept nogil:
+cdef void SoftJointsSolve(SoftContext *ctx, bint useBias) noexcept nogil:
     cdef cpArray *constraints = ctx.space.constraints
     cdef cpConstraint *c
+    cdef const SoftSoftness *soft = &ctx.jointSoft if useBias else NULL
     cdef int i
     if constraints.num == 0:
         return
     SoftScatterJointBodies(ctx)
     for i in range(constraints.num):
         c = <cpConstraint *>constraints.arr[i]
-        c.klass.applyImpulse(c, ctx.h)
+        c.klass.softApplyImpulse(c, ctx.h, soft)
     SoftGatherJointBodies(ctx)
 
 cdef void SoftFinishJoints(SoftContext *ctx) noexcept nogil:
@@ -1608,6 +1615,10 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     if staticHertz > 0.25 * ctx.inv_h:
         staticHertz = 0.25 * ctx.inv_h
     ctx.staticSoft = SoftMakeSoft(staticHertz, space.soft.contactDampingRatio, ctx.h)
+    hertz = space.soft.jointHertz
+    if hertz > 0.25 * ctx.inv_h:
+        hertz = 0.25 * ctx.inv_h
+    ctx.jointSoft = SoftMakeSoft(hertz, space.soft.jointDampingRatio, ctx.h)
     ctx.contactCount = 0
     ctx.jointBodyCount = 0
     ctx.overflowCount = 0
@@ -1646,13 +1657,13 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
             SoftJointsWarmStart(&ctx)
             SoftWarmStart(&ctx)
             SoftProfileMark(SOFT_STAGE_WARM_START)
-            SoftJointsSolve(&ctx)
+            SoftJointsSolve(&ctx, 1)
             SoftSolve(&ctx, 1)
             SoftProfileMark(SOFT_STAGE_SOLVE)
             SoftRun(&ctx, SOFT_TASK_INTEGRATE_POSITIONS, 1, ctx.bodyCount, 0)
             SoftProfileMark(SOFT_STAGE_INTEGRATE)
             for r in range(SOFT_RELAX_ITERATIONS):
-                SoftJointsSolve(&ctx)
+                SoftJointsSolve(&ctx, 0)
                 SoftRelax(&ctx)
             SoftAccumulate(&ctx)
             SoftProfileMark(SOFT_STAGE_RELAX)

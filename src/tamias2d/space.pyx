@@ -1028,13 +1028,16 @@ cdef class Space:
         switch from chipmunk to soft skips one position update, a switch back
         repeats one.
 
-        Joints in the soft solver are Chipmunk's own, stepped every substep
-        with ``h = dt / substeps`` (pre-step, warm start, an impulse pass in
-        the solve and one in the relax): ``max_force`` still bounds the force
-        (an impulse of ``max_force * h`` per substep), ``error_bias`` is
-        still the fraction of a joint's error left after one second,
-        ``max_bias`` caps the correction speed; ``Constraint.impulse`` after
-        a step is the last substep's impulse times ``substeps``.
+        Joints in the soft solver are soft constraints, solved every substep
+        with ``h = dt / substeps`` (warm start, an impulse pass in the solve
+        and one in the relax), their errors corrected by a spring of
+        :attr:`joint_hertz` and :attr:`joint_damping_ratio`: ``max_force``
+        still bounds the force (an impulse of ``max_force * h`` per substep),
+        ``max_bias`` caps the correction speed, ``error_bias`` is not used;
+        slide joints, rotary limits and ratchets hold their nearer limit
+        before it is reached. Springs and the motor are Chipmunk's own.
+        ``Constraint.impulse`` after a step is the last substep's impulse
+        times ``substeps``.
 
         >>> import tamias2d
         >>> tamias2d.Space().solver
@@ -1129,6 +1132,46 @@ cdef class Space:
     def contact_damping_ratio(self, value):
         tamias_wait_for_step(&self._space)
         self._space.soft.contactDampingRatio = _soft_nonneg(value, "contact_damping_ratio")
+
+    @property
+    def joint_hertz(self):
+        """Stiffness of the soft solver's joint correction, in hertz
+        (default 60; capped at a quarter of the substep rate). A joint pulled
+        apart (a pin's distance, a pivot's anchors, a gear's phase, a limit
+        passed) is brought back by a spring of this frequency and
+        :attr:`joint_damping_ratio`, no faster than the joint's ``max_bias``;
+        ``max_force`` caps the joint's force as in the chipmunk solver, and
+        ``error_bias`` is not used. 0 turns the correction off (the joints
+        still hold velocities). Time only: the same in any length units.
+        The chipmunk solver does not use it.
+
+        >>> import tamias2d
+        >>> tamias2d.Space().joint_hertz
+        60.0
+        """
+        return self._space.soft.jointHertz
+
+    @joint_hertz.setter
+    def joint_hertz(self, value):
+        tamias_wait_for_step(&self._space)
+        self._space.soft.jointHertz = _soft_nonneg(value, "joint_hertz")
+
+    @property
+    def joint_damping_ratio(self):
+        """Damping ratio of the soft solver's joint correction (default 2:
+        over-damped, so a stretched chain closes without ringing; 1 is
+        critical damping). Dimensionless.
+
+        >>> import tamias2d
+        >>> tamias2d.Space().joint_damping_ratio
+        2.0
+        """
+        return self._space.soft.jointDampingRatio
+
+    @joint_damping_ratio.setter
+    def joint_damping_ratio(self, value):
+        tamias_wait_for_step(&self._space)
+        self._space.soft.jointDampingRatio = _soft_nonneg(value, "joint_damping_ratio")
 
     @property
     def contact_push_out(self):
