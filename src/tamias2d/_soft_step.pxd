@@ -51,6 +51,16 @@ cdef const cpFloat SOFT_SPECULATIVE_PER_SLOP = 4.0
 # pyramids and under heavy bodies, where it shows as jitter.
 cdef enum:
     SOFT_RELAX_ITERATIONS = 2
+# Restitution passes at most (SoftApplyRestitution), Chipmunk's default
+# iterations; a pass after the first applies only impulses above this
+# fraction of the bounce's.
+cdef enum:
+    SOFT_RESTITUTION_PASSES = 10
+cdef const cpFloat SOFT_RESTITUTION_TOLERANCE = 1e-6
+# A point whose approach speed is within this fraction of the step's
+# largest bounce was at rest (resting contacts keep from closing in the
+# restitution passes).
+cdef const cpFloat SOFT_RESTING_FRACTION = 1e-3
 # A loaded contact point is stiffened so that its load sinks it at most this
 # fraction of the smaller of the two bodies' sizes (SoftPointSoftness) ...
 cdef const cpFloat SOFT_MAX_LOAD_DEFLECTION = 0.005
