@@ -1142,7 +1142,8 @@ def _make_cases():
         group="degenerate",
         note="GJK/EPA on exactly coincident polygons returns a zero normal and "
              "distance 0, so no impulse acts; any offset (1e-3 in the next case) "
-             "lets them separate"))
+             "lets them separate (the soft solver's narrow phase uses face normals "
+             "there and parts them)"))
     cases.append(Case(
         "near_coincident_polys", "the same pairs, the second moved by (1e-3, 5e-4)",
         "they end >= 0.95 touching distance apart, speed < 1000, no NaN",

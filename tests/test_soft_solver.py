@@ -579,7 +579,8 @@ SOFT_PASSES = {
     "stack_10", "stack_20", "pyramid_20", "mass_ratio_10", "mass_ratio_100", "tunnel",
     "scale_1e-3", "far_1e6", "poly_collinear", "poly_duplicate", "poly_sliver",
     "poly_1000_tube", "poly_256_floor", "zero_radius_floor", "coincident_circles",
-    "near_coincident_polys", "long_run", "elastic_gas", "card_house", "arch",
+    "near_coincident_polys", "coincident_polys", "long_run", "elastic_gas", "card_house",
+    "arch",
     "light_on_heavy_1000", "friction_ramp", "overlapping_start", "overfilled_box",
     "thin_wall", "thin_wall_fast", "scale_1e-3_slop", "scale_1e3_slop",
 }

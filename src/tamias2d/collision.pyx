@@ -709,6 +709,39 @@ cdef void PolyToPolySeparatingAxes(const cpShape *a, const cpShape *b,
     ContactPoints(SupportEdgeForPoly(poly1, points.n), SupportEdgeForPoly(poly2, cpvneg(points.n)),
                   points, info)
 
+# The soft solver's circle-polygon pairs: where the circle's centre is
+# inside the polygon's core, the face it is least deep behind gives the
+# normal (what EPA converges to for a point, with no iterations; Box2D's
+# circle-polygon collider does the same). GJK/EPA finds no normal for a
+# centre exactly at the polygon's (a circle created inside a box), so no
+# impulse could part them. A centre outside the core goes to GJK as before.
+cdef void CircleToPolyFaces(const cpShape *a, const cpShape *b,
+                            cpCollisionInfo *info) noexcept nogil:
+    cdef const cpCircleShape *circle = <const cpCircleShape *>a
+    cdef const cpPolyShape *poly = <const cpPolyShape *>b
+    cdef cpVect center = circle.tc
+    cdef cpFloat best = -INFINITY
+    cdef cpFloat sep
+    cdef cpVect n, inner
+    cdef int i, face = 0
+    if poly.count < 3:
+        CircleToPoly(a, b, info)
+        return
+    for i in range(poly.count):
+        sep = cpvdot(poly.planes[i].n, cpvsub(center, poly.planes[i].v0))
+        if sep > best:
+            best = sep
+            face = i
+    if best > 0.0:
+        CircleToPoly(a, b, info)
+        return
+    # From the circle to the polygon: against the face's outward normal.
+    n = cpvneg(poly.planes[face].n)
+    info.n = n
+    inner = cpvadd(center, cpvmult(n, best))  # the centre moved onto the face
+    cpCollisionInfoPushContact(info, cpvadd(center, cpvmult(n, circle.r)),
+                               cpvadd(inner, cpvmult(n, -poly.r)), 0)
+
 cdef void CollisionError_(const cpShape *a, const cpShape *b, cpCollisionInfo *info) noexcept nogil:
     # Munk2D aborts the process here. The slot is reached only with unsorted
     # types; the caller raises CollisionError once back in Python.
@@ -753,10 +786,12 @@ cdef cpCollisionInfo cpCollide(const cpShape *a, const cpShape *b, cpCollisionID
                                cpContact *contacts, cpFloat margin) noexcept nogil:
     return CollideWith(CollisionFuncs, a, b, id, contacts, margin)
 
-# The soft solver's table: Munk2D's, but polygon pairs by separating axes.
+# The soft solver's table: Munk2D's, but polygon pairs by separating axes
+# and circles inside polygons by their faces.
 cdef CollisionFunc SoftCollisionFuncs[9]
 for _i in range(9):
     SoftCollisionFuncs[_i] = CollisionFuncs[_i]
+SoftCollisionFuncs[6] = CircleToPolyFaces
 SoftCollisionFuncs[8] = PolyToPolySeparatingAxes
 
 cdef cpCollisionInfo cpCollideSoft(const cpShape *a, const cpShape *b, cpCollisionID id,
