@@ -525,38 +525,14 @@ def test_error_bias_changes_nothing_in_the_soft_solver():
 
 
 def _heavy_chain(solver):
-    # 15 pivot links of 1 (length 20) carrying a 100 ball, released
-    # horizontal; the worst pivot gap over the run and over its last second
-    s = tamias2d.Space(solver=solver)
-    s.gravity = 0, -900
-    prev = s.static_body
-    bodies = []
-    nofilter = tamias2d.ShapeFilter(group=1)
-    for i in range(15):
-        b = tamias2d.Body(1, tamias2d.moment_for_segment(1, (-10, 0), (10, 0), 2))
-        b.position = 20 * i + 10, 0
-        link = tamias2d.Segment(b, (-10, 0), (10, 0), 2)
-        link.filter = nofilter
-        s.add(b, link)
-        s.add(tamias2d.PivotJoint(prev, b, (20 * i, 0)))
-        bodies.append(b)
-        prev = b
-    ball = tamias2d.Body(100, tamias2d.moment_for_circle(100, 0, 10))
-    ball.position = 310, 0
-    ballshape = tamias2d.Circle(ball, 10)
-    ballshape.filter = nofilter
-    s.add(ball, ballshape)
-    s.add(tamias2d.PivotJoint(prev, ball, (300, 0)))
-    worst = last = 0.0
-    for step in range(300):
-        s.step(DT)
-        ends = [s.static_body.position] + [b.local_to_world((10, 0)) for b in bodies]
-        starts = [b.local_to_world((-10, 0)) for b in bodies] + [ball.local_to_world((-10, 0))]
-        g = max((p - q).length for p, q in zip(ends, starts))
-        worst = max(worst, g)
-        if step >= 240:
-            last = max(last, g)
-    return worst, last
+    # benchmarks/joints_box2d.py's chain of 15 pivot links carrying a ball of
+    # 100 times a link's mass: the worst pivot gap over the run and over its
+    # last second
+    import os
+    import sys
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "benchmarks"))
+    import joints_box2d
+    return joints_box2d.run(*joints_box2d.tamias_chain(100.0, solver))
 
 
 def test_a_heavy_chain_holds_in_the_soft_solver():
