@@ -326,7 +326,7 @@ def _chain(solver, collide=True, windows=1):
 
 
 def test_pivot_chain_holds_better_than_chipmunk():
-    # soft joints solved in every substep stretch less (0.60 against 3.06 here)
+    # soft joints solved in every substep stretch less (0.52 against 3.06 here)
     soft = _chain("soft", collide=False)
     assert soft < 0.5 * _chain("chipmunk", collide=False)
     assert soft < 0.1 * 20
@@ -335,7 +335,7 @@ def test_pivot_chain_holds_better_than_chipmunk():
 def test_pivot_chain_whose_links_collide_at_the_joints_stays_bounded():
     # the links' rounded ends overlap by 4 at every pivot (collide_bodies):
     # the contacts push the joints apart in both solvers, a tug of war that
-    # never settles (worst per 300 steps: soft 4.1, 3.6, 3.4; chipmunk 5.1,
+    # never settles (worst per 300 steps: soft 3.9, 3.5, 3.7; chipmunk 5.1,
     # 4.5, 7.2). Neither runs away: the chain never comes apart (a stretch of
     # a whole link, 20).
     for solver in ("soft", "chipmunk"):
@@ -376,7 +376,7 @@ def test_motor_max_force_is_a_force():
 # Criteria, written before the runs: under gravity -900 for 300 steps at the
 # defaults, each joint's error stays below 1 unit (or 0.02 rad) at every step
 # (the rotary limit does not: a box swinging into it on a pivot overshoots by
-# 0.052 rad, chipmunk 0.041, the two joints fighting over one body; it then
+# 0.048 rad, chipmunk 0.041, the two joints fighting over one body; it then
 # rests 0.0066 rad past, the spring's give, so it is held to 0.1 rad), and
 # below 0.1 unit (0.01 rad) over the last second;
 # a pin started 10 units too long closes to below 1 within 1 s, not at all
@@ -538,7 +538,7 @@ def _heavy_chain(solver):
 def test_a_heavy_chain_holds_in_the_soft_solver():
     # A 100:1 mass ratio at the end of a chain. The chipmunk solver lets it
     # come apart (worst gap ~790); the soft solver holds it to a few units
-    # (4.6 worst, 2.8 over the last second), a little better than Box2D v3
+    # (4.6 worst, 2.7 over the last second), a little better than Box2D v3
     # (pyb2d3 3.1, the same scene in metres: 5.5 and 3.3). The criterion set
     # before the runs (worst < 2, last < 1) is met by neither; this asserts
     # the looser bound both engines' behaviour supports.
