@@ -470,6 +470,20 @@ def _random_polygon(rng, centre, radius, sides, angle):
     return poly
 
 
+def _soft_finds_what_munk2d_finds(a, b, margin, trial):
+    """The soft solver's narrow phase against Munk2D's on one pair: the same
+    features, and the normal and points up to EPA's tolerance. Returns both
+    first results and whether there were contacts."""
+    first, _, n, contacts = _testing._collide(a, b, margin=margin)
+    first_s, _, n_s, contacts_s = _testing._collide(a, b, margin=margin, soft=True)
+    assert [c[2] for c in contacts] == [c[2] for c in contacts_s], trial
+    if contacts:
+        assert abs(n.x - n_s.x) < 1e-6 and abs(n.y - n_s.y) < 1e-6, trial
+        for (p1, p2, _), (q1, q2, _) in zip(contacts, contacts_s):
+            assert (p1 - q1).length < 1e-6 and (p2 - q2).length < 1e-6, trial
+    return first, first_s, bool(contacts)
+
+
 @pytest.mark.parametrize("seed", range(4))
 def test_separating_axes_find_what_epa_finds(seed):
     # Where the polygons overlap, the soft solver's narrow phase must find
@@ -485,15 +499,9 @@ def test_separating_axes_find_what_epa_finds(seed):
         b = _random_polygon(rng, (offset * math.cos(direction), offset * math.sin(direction)),
                             1.0, rng.randint(3, 8), rng.random() * 7)
         for margin in (0.0, 0.1):
-            first, _, n, contacts = _testing._collide(a, b, margin=margin)
-            first_s, _, n_s, contacts_s = _testing._collide(a, b, margin=margin, soft=True)
+            first, first_s, touching = _soft_finds_what_munk2d_finds(a, b, margin, trial)
             assert first == first_s
-            assert [c[2] for c in contacts] == [c[2] for c in contacts_s], trial
-            if contacts:
-                overlapping += margin == 0.0
-                assert abs(n.x - n_s.x) < 1e-6 and abs(n.y - n_s.y) < 1e-6, trial
-                for (p1, p2, _), (q1, q2, _) in zip(contacts, contacts_s):
-                    assert (p1 - q1).length < 1e-6 and (p2 - q2).length < 1e-6, trial
+            overlapping += touching and margin == 0.0
     assert overlapping > 50          # the test saw the new path at work
 
 
@@ -513,14 +521,8 @@ def test_circle_inside_a_polygon_finds_what_epa_finds(seed):
         circle.cache_bb()
         centre_inside = poly.point_query(body.position).distance < 0
         for margin in (0.0, 0.1):
-            first, _, n, contacts = _testing._collide(circle, poly, margin=margin)
-            _, _, n_s, contacts_s = _testing._collide(circle, poly, margin=margin, soft=True)
-            assert len(contacts) == len(contacts_s), trial
-            if contacts:
-                inside += centre_inside and margin == 0.0
-                assert abs(n.x - n_s.x) < 1e-6 and abs(n.y - n_s.y) < 1e-6, trial
-                for (p1, p2, _), (q1, q2, _) in zip(contacts, contacts_s):
-                    assert (p1 - q1).length < 1e-6 and (p2 - q2).length < 1e-6, trial
+            _, _, touching = _soft_finds_what_munk2d_finds(circle, poly, margin, trial)
+            inside += touching and centre_inside and margin == 0.0
     assert inside > 50               # the test saw the new path at work
 
 
