@@ -1176,14 +1176,12 @@ cdef int _read_soft(Reader *r, Parsed *p) except -1:
     # As the setters take them; a huge substep count would hang the step.
     if rec.substeps < 1 or rec.substeps > MAX_SUBSTEPS:
         _bad(f"substeps is {rec.substeps} (1 to {MAX_SUBSTEPS})")
-    if not (_fin(rec.contactHertz) and rec.contactHertz >= 0.0):
-        _bad(f"contact_hertz {rec.contactHertz} is not a finite number >= 0")
-    if not (_fin(rec.contactDampingRatio) and rec.contactDampingRatio >= 0.0):
-        _bad(f"contact_damping_ratio {rec.contactDampingRatio} is not a finite number >= 0")
-    if not (_fin(rec.jointHertz) and rec.jointHertz >= 0.0):
-        _bad(f"joint_hertz {rec.jointHertz} is not a finite number >= 0")
-    if not (_fin(rec.jointDampingRatio) and rec.jointDampingRatio >= 0.0):
-        _bad(f"joint_damping_ratio {rec.jointDampingRatio} is not a finite number >= 0")
+    for name, value in (("contact_hertz", rec.contactHertz),
+                        ("contact_damping_ratio", rec.contactDampingRatio),
+                        ("joint_hertz", rec.jointHertz),
+                        ("joint_damping_ratio", rec.jointDampingRatio)):
+        if not (_fin(value) and value >= 0.0):
+            _bad(f"{name} {value} is not a finite number >= 0")
     # -1 is "derived from collision_slop" (the setters' None).
     if not (rec.pushOut == -1.0 or (_fin(rec.pushOut) and rec.pushOut >= 0.0)):
         _bad(f"contact_push_out {rec.pushOut} is not a finite number >= 0")

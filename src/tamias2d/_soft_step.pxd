@@ -53,7 +53,7 @@ cdef enum:
     SOFT_RELAX_ITERATIONS = 2
 # Restitution passes at most (SoftApplyRestitution), Chipmunk's default
 # iterations; a pass after the first applies only impulses above this
-# fraction of the bounce's.
+# fraction of the step's largest bounce (times the point's mass).
 cdef enum:
     SOFT_RESTITUTION_PASSES = 10
 cdef const cpFloat SOFT_RESTITUTION_TOLERANCE = 1e-6

@@ -200,11 +200,17 @@ cdef cpBool cpConstraintIsPinJoint(const cpConstraint *constraint) noexcept nogi
 # -- cpSlideJoint.c ------------------------------------------------------------------------------
 cdef cpConstraintClass _slideJointClass
 
-cdef inline cpFloat _slideGeometry(cpSlideJoint *joint, cpBody *a, cpBody *b) noexcept nogil:
-    # Anchors, axis and effective mass; returns how far past a limit.
+cdef inline cpVect _slideArms(cpSlideJoint *joint, cpBody *a, cpBody *b) noexcept nogil:
+    # The anchors' arms; returns the anchors' separation.
     joint.r1 = cpTransformVect(a.transform, cpvsub(joint.anchorA, a.cog))
     joint.r2 = cpTransformVect(b.transform, cpvsub(joint.anchorB, b.cog))
-    cdef cpVect delta = cpvsub(cpvadd(b.p, joint.r2), cpvadd(a.p, joint.r1))
+    return cpvsub(cpvadd(b.p, joint.r2), cpvadd(a.p, joint.r1))
+
+cdef void _slidePreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
+    cdef cpSlideJoint *joint = <cpSlideJoint *>c
+    cdef cpBody *a = c.a
+    cdef cpBody *b = c.b
+    cdef cpVect delta = _slideArms(joint, a, b)
     cdef cpFloat dist = cpvlength(delta)
     cdef cpFloat pdist = 0.0
     if dist > joint.max:
@@ -217,11 +223,6 @@ cdef inline cpFloat _slideGeometry(cpSlideJoint *joint, cpBody *a, cpBody *b) no
         joint.n = cpvzero()
         joint.jnAcc = 0.0
     joint.nMass = 1.0 / k_scalar(a, b, joint.r1, joint.r2, joint.n)
-    return pdist
-
-cdef void _slidePreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
-    cdef cpSlideJoint *joint = <cpSlideJoint *>c
-    cdef cpFloat pdist = _slideGeometry(joint, c.a, c.b)
     cdef cpFloat maxBias = c.maxBias
     joint.bias = cpfclamp(-bias_coef(c.errorBias, dt) * pdist / dt, -maxBias, maxBias)
 
@@ -230,9 +231,7 @@ cdef void _slideSoftPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
     cdef cpSlideJoint *joint = <cpSlideJoint *>c
     cdef cpBody *a = c.a
     cdef cpBody *b = c.b
-    joint.r1 = cpTransformVect(a.transform, cpvsub(joint.anchorA, a.cog))
-    joint.r2 = cpTransformVect(b.transform, cpvsub(joint.anchorB, b.cog))
-    cdef cpVect delta = cpvsub(cpvadd(b.p, joint.r2), cpvadd(a.p, joint.r1))
+    cdef cpVect delta = _slideArms(joint, a, b)
     cdef cpFloat dist = cpvlength(delta)
     cdef cpVect n
     if dist - joint.min < joint.max - dist:
@@ -607,21 +606,16 @@ cdef cpBool cpConstraintIsDampedRotarySpring(const cpConstraint *constraint) noe
 # -- cpRotaryLimitJoint.c -------------------------------------------------------------------------
 cdef cpConstraintClass _rotaryLimitJointClass
 
-cdef inline cpFloat _rotaryLimitGeometry(cpRotaryLimitJoint *joint, cpBody *a,
-                                       cpBody *b) noexcept nogil:
-    # The moment; returns how far past a limit (signed).
-    cdef cpFloat dist = b.a - a.a
+cdef void _rotaryLimitPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
+    cdef cpRotaryLimitJoint *joint = <cpRotaryLimitJoint *>c
+    # How far past a limit (signed).
+    cdef cpFloat dist = c.b.a - c.a.a
     cdef cpFloat pdist = 0.0
     if dist > joint.max:
         pdist = joint.max - dist
     elif dist < joint.min:
         pdist = joint.min - dist
-    joint.iSum = 1.0 / (a.i_inv + b.i_inv)
-    return pdist
-
-cdef void _rotaryLimitPreStep(cpConstraint *c, cpFloat dt) noexcept nogil:
-    cdef cpRotaryLimitJoint *joint = <cpRotaryLimitJoint *>c
-    cdef cpFloat pdist = _rotaryLimitGeometry(joint, c.a, c.b)
+    joint.iSum = 1.0 / (c.a.i_inv + c.b.i_inv)
     cdef cpFloat maxBias = c.maxBias
     joint.bias = cpfclamp(-bias_coef(c.errorBias, dt) * pdist / dt, -maxBias, maxBias)
     # Not at a limit: forget the accumulated impulse.
