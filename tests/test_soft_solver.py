@@ -902,6 +902,71 @@ def test_arbiter_guesses_change_nothing(scene):
         assert repr(g) == repr(w), f"body {i}: {g} != {w}"
 
 
+def _static_changes():
+    # A resting pile whose static world and filters change under it: a
+    # static box added into it, the ground moved and reindexed, a filter and
+    # a sensor switched, a shape reindexed by hand.
+    s = tamias2d.Space()
+    s.gravity = 0, -900
+    ground = tamias2d.Segment(s.static_body, (-300, 0), (300, 0), 2)
+    ground.friction = 0.8
+    s.add(ground)
+    boxes = []
+    for i in range(15):
+        b = tamias2d.Body(1, tamias2d.moment_for_box(1, (20, 20)))
+        b.position = -140 + 21 * (i % 5), 11 + (i // 5) * 21
+        box = tamias2d.Poly.create_box(b, (20, 20))
+        box.friction = 0.8
+        s.add(b, box)
+        boxes.append(box)
+
+    def hook(i):
+        if i == 60:
+            s.add(tamias2d.Poly(s.static_body, [(-60, 0), (-40, 0), (-40, 30), (-60, 30)]))
+        if i == 90:
+            s.static_body.position = 0, -3
+            s.reindex_static()
+        if i == 120:
+            boxes[7].filter = tamias2d.ShapeFilter(categories=0)
+        if i == 150:
+            boxes[7].filter = tamias2d.ShapeFilter()
+            boxes[3].sensor = True
+        if i == 180:
+            boxes[3].sensor = False
+            boxes[11].body.position += (0, 1)
+            s.reindex_shape(boxes[11])
+    s.scene_hook = hook
+    return s
+
+
+@pytest.mark.parametrize("scene", ["pyramid", "add_remove", "type_changes", "sleepy_pile",
+                                   "static_changes", "rain_persistence_0"])
+def test_kept_broad_phase_walks_change_nothing(scene):
+    # While no leaf of the tree leaves its box and nothing is added or
+    # removed, the soft solver takes a step's pairs from the last walk over
+    # the tree instead of walking it again: the same pairs in the same order,
+    # so the same step. Any change to the trees must end that.
+    import scenes
+    from tamias2d import _soft_step
+    builds = {"sleepy_pile": _sleepy_pile, "static_changes": _static_changes,
+              "rain_persistence_0": lambda: _short_memory_rain(0)}
+    build = builds.get(scene) or (lambda: getattr(scenes, scene)(tamias2d))
+    assert _soft_step._keep_broad_phase_pairs()
+    try:
+        _soft_step._keep_broad_phase_pairs(False)
+        walked = _soft_step._kept_walks_count()
+        without = _state_after(build, 240)
+        assert _soft_step._kept_walks_count() == walked
+    finally:
+        _soft_step._keep_broad_phase_pairs(True)
+    kept = _soft_step._kept_walks_count()
+    with_kept = _state_after(build, 240)
+    assert _soft_step._kept_walks_count() > kept, "no step kept its walk: nothing was tested"
+    assert len(with_kept) == len(without)
+    for i, (k, w) in enumerate(zip(with_kept, without)):
+        assert repr(k) == repr(w), f"body {i}: {k} != {w}"
+
+
 @pytest.mark.parametrize("scene", ["pyramid", "mixed", "rain"])
 def test_arbiters_updated_in_the_narrow_phase_give_the_same_bits(scene):
     # Without begin or pre-solve callbacks the soft solver updates the cached

@@ -32,6 +32,10 @@ cdef struct cpBBTree:
     Pair *pooledPairs
     cpArray *allocatedBuffers
     cpTimestamp stamp
+    # Not Munk2D's: counts every change of the tree's shape or of its pairs
+    # (kept in the dynamic tree for both), so that a caller can tell that a
+    # walk over the pairs would report the same ones in the same order.
+    unsigned long long version
 
 cdef struct NodeChildren:
     Node *a
@@ -81,9 +85,10 @@ cdef cpSpatialIndex *cpBBTreeNew(cpSpatialIndexBBFunc bbfunc, cpSpatialIndex *st
 cdef void cpBBTreeOptimize(cpSpatialIndex *index) noexcept nogil
 cdef void cpBBTreeSetVelocityFunc(cpSpatialIndex *index, cpBBTreeVelocityFunc func) noexcept nogil
 # The soft solver's broad phase: cpBBTreeReindexQuery reporting where each
-# pair's id lives; false (nothing done) unless the index and its static
-# index are trees.
+# pair's id lives, or nothing when the tree is still at the version in
+# `known` (then the caller's record of the last walk holds); false (nothing
+# done) unless the index and its static index are trees.
 cdef bint cpBBTreeReindexQuerySlots(cpSpatialIndex *index, cpBBTreeSlotFunc func,
-                                    void *data) noexcept nogil
+                                    void *data, unsigned long long *known) noexcept nogil
 # The tree class table (what GetTree compares klass against).
 cdef cpSpatialIndexClass *cpBBTreeClass() noexcept nogil

@@ -126,6 +126,10 @@ cdef inline cpBBTree *GetMasterTree(cpBBTree *tree) noexcept nogil:
     return dynamicTree if dynamicTree != NULL else tree
 
 
+cdef inline void TreeChanged(cpBBTree *tree) noexcept nogil:
+    GetMasterTree(tree).version += 1
+
+
 cdef inline void IncrementStamp(cpBBTree *tree) noexcept nogil:
     cdef cpBBTree *dynamicTree = GetTree(tree.spatialIndex.dynamicIndex)
     if dynamicTree != NULL:
@@ -181,6 +185,8 @@ cdef inline void ThreadUnlink(Thread thread) noexcept nogil:
 cdef void PairsClear(Node *leaf, cpBBTree *tree) noexcept nogil:
     cdef Pair *pair = leaf.node.leaf.pairs
     cdef Pair *next_pair
+    if pair != NULL:
+        TreeChanged(tree)
     leaf.node.leaf.pairs = NULL
     while pair != NULL:
         if pair.a.leaf == leaf:
@@ -199,6 +205,7 @@ cdef void PairInsert(Node *a, Node *b, cpBBTree *tree) noexcept nogil:
     cdef Pair *pair = PairFromPool(tree)
     if pair == NULL:
         return      # out of memory: the pair is lost, the flag is raised
+    TreeChanged(tree)
     # The new pair goes at the head of both leaves' lists, id 0 (no cache yet).
     pair.a.prev = NULL
     pair.a.leaf = a
@@ -536,6 +543,7 @@ cdef bint LeafUpdate(Node *leaf, cpBBTree *tree) noexcept nogil:
         # Left its fat box: refatten and reinsert. The removal frees the one
         # internal node the insertion takes, so this cannot run out of memory.
         leaf.bb = GetBB(tree, leaf.obj)
+        TreeChanged(tree)
         root = SubtreeRemove(root, leaf, tree)
         tree.root = SubtreeInsert(root, leaf, tree)
         PairsClear(leaf, tree)
@@ -644,6 +652,7 @@ cdef void cpBBTreeInsert(cpSpatialIndex *index, void *obj, cpHashValue hashid) n
     cdef Node *leaf = <Node *>cpHashSetInsert(tree.leaves, hashid, obj, leafSetTrans, tree)
     if leaf == NULL:
         return
+    TreeChanged(tree)
     tree.root = SubtreeInsert(tree.root, leaf, tree)
     leaf.node.leaf.stamp = GetMasterTree(tree).stamp
     LeafAddPairs(leaf, tree)
@@ -655,6 +664,7 @@ cdef void cpBBTreeRemove(cpSpatialIndex *index, void *obj, cpHashValue hashid) n
     cdef Node *leaf = <Node *>cpHashSetRemove(tree.leaves, hashid, obj)
     if leaf == NULL:
         return      # not in this tree (Munk2D would crash)
+    TreeChanged(tree)
     tree.root = SubtreeRemove(tree.root, leaf, tree)
     PairsClear(leaf, tree)
     NodeRecycle(tree, leaf)
@@ -670,16 +680,24 @@ cdef void LeafUpdateWrap(void *elt, void *data) noexcept nogil:
 
 
 cdef void ReindexQuery(cpBBTree *tree, cpSpatialIndexQueryFunc func, cpBBTreeSlotFunc slotFunc,
-                       void *data) noexcept nogil:
+                       void *data, unsigned long long *known) noexcept nogil:
     # Pairs go to func (the id it returns is kept) or, with slotFunc, to
-    # slotFunc with where the id lives.
+    # slotFunc with where the id lives. Given `known`, a version of the tree
+    # whose walk the caller has kept: the walk is skipped if the leaves'
+    # refresh left the tree at that version (the same pairs, in the same
+    # order, would be reported); otherwise set to the version after it.
     cdef cpSpatialIndex *staticIndex
     cdef Node *staticRoot = NULL
     cdef MarkContext context
     if tree.root == NULL:
+        if known != NULL:
+            known[0] = 0
         return
     # Leaves are refreshed in hash-set order; LeafUpdate may change the root.
     cpHashSetEach(tree.leaves, LeafUpdateWrap, tree)
+    if known != NULL and known[0] != 0 and known[0] == tree.version:
+        IncrementStamp(tree)
+        return
     staticIndex = tree.spatialIndex.staticIndex
     if staticIndex != NULL and staticIndex.klass == &klass:
         staticRoot = (<cpBBTree *>staticIndex).root
@@ -692,27 +710,30 @@ cdef void ReindexQuery(cpBBTree *tree, cpSpatialIndexQueryFunc func, cpBBTreeSlo
     if staticIndex != NULL and staticRoot == NULL and func != NULL:
         cpSpatialIndexCollideStatic(<cpSpatialIndex *>tree, staticIndex, func, data)
     IncrementStamp(tree)
+    if known != NULL:
+        known[0] = tree.version
 
 
 cdef void cpBBTreeReindexQuery(cpSpatialIndex *index, cpSpatialIndexQueryFunc func,
                                void *data) noexcept nogil:
-    ReindexQuery(<cpBBTree *>index, func, NULL, data)
+    ReindexQuery(<cpBBTree *>index, func, NULL, data, NULL)
 
 
 cdef bint cpBBTreeReindexQuerySlots(cpSpatialIndex *index, cpBBTreeSlotFunc func,
-                                    void *data) noexcept nogil:
+                                    void *data, unsigned long long *known) noexcept nogil:
     # cpBBTreeReindexQuery, but each pair is reported with a pointer to the
     # id the tree keeps for it (NULL for a pair new this step, whose id is
     # not kept), so that the caller can run the narrow phase later, and in
-    # parallel, and store the ids then. Same pairs in the same order. False
-    # (nothing done) unless this index and its static index are trees.
+    # parallel, and store the ids then. Same pairs in the same order, unless
+    # `known` says that the caller has them already (see ReindexQuery).
+    # False (nothing done) unless this index and its static index are trees.
     cdef cpSpatialIndex *staticIndex
     if index.klass != &klass:
         return 0
     staticIndex = (<cpBBTree *>index).spatialIndex.staticIndex
     if staticIndex != NULL and staticIndex.klass != &klass:
         return 0
-    ReindexQuery(<cpBBTree *>index, NULL, func, data)
+    ReindexQuery(<cpBBTree *>index, NULL, func, data, known)
     return 1
 
 
@@ -872,6 +893,7 @@ cdef void cpBBTreeOptimize(cpSpatialIndex *index) noexcept nogil:
     cursor.cursor = nodes
     cpHashSetEach(tree.leaves, fillNodeArray, &cursor)
     # The rebuild takes exactly as many internal nodes as this returns to the pool.
+    TreeChanged(tree)
     SubtreeRecycle(tree, root, nodes, count)
     tree.root = partitionNodes(tree, nodes, count, bounds)
     free(nodes)

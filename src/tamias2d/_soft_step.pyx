@@ -84,6 +84,8 @@ cdef void SoftScratchFree(cpSoftScratch *scratch) noexcept nogil:
         cpfree(scratch.buf[i])
         scratch.buf[i] = NULL
         scratch.cap[i] = 0
+    scratch.pairCount = 0
+    scratch.pairsVersion = 0
 
 cdef cpFloat SoftPushOut(const cpSpace *space) noexcept nogil:
     if space.soft.pushOut >= 0.0:
@@ -129,6 +131,7 @@ cdef enum:
     SOFT_SCRATCH_JOINT_BODIES
     SOFT_SCRATCH_SOURCE       # each contact's index in space.arbiters
     SOFT_SCRATCH_CANDIDATES   # the broad phase's pairs (SoftCollide)
+    SOFT_SCRATCH_PAIRS        # the last walk of the tree's pairs (SoftPair)
     SOFT_SCRATCH_COUNT
 
 # (cpSoftScratch holds 12 buffers.)
@@ -153,6 +156,13 @@ cdef void *_reserve(cpSpace *space, int which, int need, size_t size) noexcept n
 
 
 # -- the step's context -----------------------------------------------------------------
+
+# A pair as the broad phase's walk reported it, kept for the steps after
+# that leave the tree as it was.
+cdef struct SoftPair:
+    cpShape *a
+    cpShape *b
+    cpPairSlot *slot
 
 # A pair the broad phase reported, and its narrow phase (SoftCollide).
 cdef struct SoftCandidate:
@@ -186,6 +196,7 @@ cdef struct SoftContext:
     int candidateCount
     int candidateCap
     bint updateInNarrow       # no begin or pre-solve callbacks: arbiters updated in parallel
+    bint keepingPairs         # the broad phase's walk is being kept (SoftCollectPair)
     bint threaded             # stages may run on the pool (SoftRun)
     bint serialVelocities     # a body has its own velocity_func (Python: one thread)
     bint serialPositions      # a body has its own position_func
@@ -283,15 +294,15 @@ def _profile(on):
 # same whoever ran which pair. A begin or pre-solve callback therefore sees
 # every pair's narrow phase done.
 
-cdef void SoftCollectPair(void *a, void *b, cpPairSlot *slot, void *data) noexcept nogil:
+cdef void SoftConsiderPair(SoftContext *ctx, cpShape *a, cpShape *b,
+                           cpPairSlot *slot) noexcept nogil:
     # The cheap rejection here (most pairs of the broad phase, whose boxes
     # are widened for continuous collision, go no further); the narrow phase
     # of the others later.
-    cdef SoftContext *ctx = <SoftContext *>data
     cdef SoftCandidate *c
     cdef int n = ctx.candidateCount
     cdef cpFloat margin
-    if cpSpaceRejectPair(ctx.space, <cpShape *>a, <cpShape *>b, &margin):
+    if cpSpaceRejectPair(ctx.space, a, b, &margin):
         return
     if n >= ctx.candidateCap:
         ctx.candidates = <SoftCandidate *>_reserve(ctx.space, SOFT_SCRATCH_CANDIDATES, n + 1,
@@ -301,8 +312,8 @@ cdef void SoftCollectPair(void *a, void *b, cpPairSlot *slot, void *data) noexce
             return  # out of memory: the flag is up, the pair is skipped
         ctx.candidateCap = ctx.space.softScratch.cap[SOFT_SCRATCH_CANDIDATES]
     c = &ctx.candidates[n]
-    c.a = <cpShape *>a
-    c.b = <cpShape *>b
+    c.a = a
+    c.b = b
     c.slot = slot
     if slot != NULL:
         c.id = slot.id
@@ -313,8 +324,33 @@ cdef void SoftCollectPair(void *a, void *b, cpPairSlot *slot, void *data) noexce
     c.margin = margin
     ctx.candidateCount = n + 1
 
+cdef void SoftCollectPair(void *a, void *b, cpPairSlot *slot, void *data) noexcept nogil:
+    # A pair of the walk: kept for the next steps (while the walk can be
+    # kept: every pair has its slot, no allocation failed), then considered.
+    cdef SoftContext *ctx = <SoftContext *>data
+    cdef cpSoftScratch *scratch = &ctx.space.softScratch
+    cdef SoftPair *pairs
+    cdef int n = scratch.pairCount
+    if ctx.keepingPairs:
+        if slot == NULL:
+            ctx.keepingPairs = 0
+        else:
+            pairs = <SoftPair *>_reserve(ctx.space, SOFT_SCRATCH_PAIRS, n + 1, sizeof(SoftPair))
+            if pairs == NULL:
+                ctx.keepingPairs = 0
+            else:
+                pairs[n].a = <cpShape *>a
+                pairs[n].b = <cpShape *>b
+                pairs[n].slot = slot
+                scratch.pairCount = n + 1
+    SoftConsiderPair(ctx, <cpShape *>a, <cpShape *>b, slot)
+
 # Off only in tests, which check that the guesses change nothing.
 cdef bint _use_guesses = 1
+# The same for keeping the broad phase's walk.
+cdef bint _keep_pairs = 1
+# Steps whose walk was kept, in all spaces (for tests: that it happens).
+cdef volatile long _kept_walks = 0
 
 cdef inline bint SoftGuessHolds(const cpArbiter *arb, const cpCollisionInfo *info) noexcept nogil:
     # The guess is the pair's cached arbiter: in the cache and of these two
@@ -387,6 +423,9 @@ cdef void SoftUpdateShapes(SoftContext *ctx, int begin, int end) noexcept nogil:
 
 cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     cdef cpSpace *space = ctx.space
+    cdef unsigned long long known, walked
+    cdef SoftPair *pairs
+    cdef int kept
     cdef SoftCandidate *c
     cdef cpContact *contacts
     cdef cpArbiter *arb
@@ -403,10 +442,25 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     ctx.candidateCap = space.softScratch.cap[SOFT_SCRATCH_CANDIDATES]
     ctx.candidateCount = 0
     ctx.updateInNarrow = not cpSpaceHasHandlers(space, 1, 1, 0)
-    if not cpBBTreeReindexQuerySlots(space.dynamicShapes, SoftCollectPair, ctx):
+    # The walk of the tree's pairs is kept; while no leaf leaves its box and
+    # nothing is added or removed, the next steps take its pairs from there.
+    known = space.softScratch.pairsVersion if _keep_pairs else 0
+    kept = space.softScratch.pairCount
+    ctx.keepingPairs = 1
+    space.softScratch.pairCount = 0
+    walked = known
+    if not cpBBTreeReindexQuerySlots(space.dynamicShapes, SoftCollectPair, ctx, &walked):
         # A spatial hash: pair by pair, as the chipmunk solver.
         cpSpatialIndexReindexQuery(space.dynamicShapes, cpSpaceCollideShapes, space)
         return
+    if walked == known and known != 0:
+        tamias_add(&_kept_walks, 1)
+        pairs = <SoftPair *>space.softScratch.buf[SOFT_SCRATCH_PAIRS]
+        for i in range(kept):
+            SoftConsiderPair(ctx, pairs[i].a, pairs[i].b, pairs[i].slot)
+        space.softScratch.pairCount = kept
+    else:
+        space.softScratch.pairsVersion = walked if ctx.keepingPairs else 0
     SoftProfileMark(SOFT_STAGE_BROAD_PHASE)
     SoftRun(ctx, SOFT_TASK_NARROW, 0, ctx.candidateCount, 0)
     SoftProfileMark(SOFT_STAGE_NARROW_PHASE)
@@ -1772,6 +1826,19 @@ def _arbiter_guesses(on=None):
     if on is not None:
         _use_guesses = bool(on)
     return bool(_use_guesses)
+
+def _keep_broad_phase_pairs(on=None):
+    """Whether the broad phase takes a step's pairs from its last walk over
+    the tree when the tree has not changed since (and, given `on`, set it
+    first; for tests, which check that walking every step changes nothing)."""
+    global _keep_pairs
+    if on is not None:
+        _keep_pairs = bool(on)
+    return bool(_keep_pairs)
+
+def _kept_walks_count():
+    """Steps so far (all spaces) that took their pairs from a kept walk."""
+    return tamias_load(&_kept_walks)
 
 def _pool_state():
     """The soft solver's thread pool: (workers started, stages handed out)."""
