@@ -270,12 +270,15 @@ static inline void SoftLanesWarmStart(SoftLanes *c, SoftState *st) {
     soft_warm_start_scalar(c, st);
 }
 
-static inline void SoftLanesSolve(SoftLanes *c, SoftState *st, double inv_h, double pushOut, int useBias) {
+/* accumulate (relax passes only): add the lane's impulses to its step
+ * totals after solving it, as the substep's last pass does. */
+static inline void SoftLanesSolve(SoftLanes *c, SoftState *st, double inv_h, double pushOut,
+                                  int useBias, int accumulate) {
 #if SOFT_HAVE_AVX2
-    if (soft_lanes_path == SOFT_PATH_AVX2) { soft_solve_avx2(c, st, inv_h, pushOut, useBias); return; }
+    if (soft_lanes_path == SOFT_PATH_AVX2) { soft_solve_avx2(c, st, inv_h, pushOut, useBias, accumulate); return; }
 #endif
 #if SOFT_HAVE_SIMD
-    if (soft_lanes_path == SOFT_PATH_SIMD) { soft_solve_simd(c, st, inv_h, pushOut, useBias); return; }
+    if (soft_lanes_path == SOFT_PATH_SIMD) { soft_solve_simd(c, st, inv_h, pushOut, useBias, accumulate); return; }
 #endif
-    soft_solve_scalar(c, st, inv_h, pushOut, useBias);
+    soft_solve_scalar(c, st, inv_h, pushOut, useBias, accumulate);
 }

@@ -37,7 +37,7 @@ static inline void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftState *st) {
 }
 
 static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double inv_h_s,
-                                           double pushOut_s, int useBias) {
+                                           double pushOut_s, int useBias, int accumulate) {
     int k, j;
     V zero = soft_v_splat(0.0), one = soft_v_splat(1.0);
     V inv_h = soft_v_splat(inv_h_s), negPush = soft_v_splat(-pushOut_s);
@@ -155,6 +155,12 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
                 vbx = vbx - mB * (imp * ny);
                 vby = vby + mB * (imp * nx);
                 wb = wb + iB * (imp * rtB);
+            }
+            if (accumulate) {
+                for (j = 0; j < points; j++) {
+                    S(c->totalNormal[j], L(c->totalNormal[j]) + L(c->normalImpulse[j]));
+                    S(c->totalTangent[j], L(c->totalTangent[j]) + L(c->tangentImpulse[j]));
+                }
             }
         }
         P(c->ia, c->wa, vx, vax); P(c->ia, c->wa, vy, vay); P(c->ia, c->wa, w, wa);

@@ -134,7 +134,8 @@ cdef extern from "_soft_lanes.h" nogil:
         cpFloat totalTangent[2][SOFT_LANES]
     void SoftLanesClear(SoftLanes *c, int k)
     void SoftLanesWarmStart(SoftLanes *c, SoftState *st)
-    void SoftLanesSolve(SoftLanes *c, SoftState *st, cpFloat inv_h, cpFloat pushOut, int useBias)
+    void SoftLanesSolve(SoftLanes *c, SoftState *st, cpFloat inv_h, cpFloat pushOut, int useBias,
+                        int accumulate)
     enum: SOFT_PATH_SCALAR, SOFT_PATH_SIMD, SOFT_PATH_AVX2
     void SoftLanesInit()
     int SoftLanesPathAvailable(int path)

@@ -197,6 +197,7 @@ cdef struct SoftContext:
     int candidateCap
     bint updateInNarrow       # no begin or pre-solve callbacks: arbiters updated in parallel
     bint keepingPairs         # the broad phase's walk is being kept (SoftCollectPair)
+    volatile long elastic     # a contact has restitution (set by SoftPrepareContactRange)
     bint threaded             # stages may run on the pool (SoftRun)
     bint serialVelocities     # a body has its own velocity_func (Python: one thread)
     bint serialPositions      # a body has its own position_func
@@ -780,6 +781,8 @@ cdef void SoftPrepareContactRange(SoftContext *ctx, int begin, int end) noexcept
         sc.ny = ny
         sc.friction = arb.u
         sc.restitution = arb.e
+        if arb.e != 0.0:
+            tamias_store(&ctx.elastic, 1)
         # Chipmunk adds surface_vr to the relative velocity; only its
         # tangential part is used for friction.
         sc.surfaceT = -arb.surface_vr.x * ny + arb.surface_vr.y * nx
@@ -1232,30 +1235,25 @@ cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias) noex
         sb.vy = vby
         sb.w = wb
 
-cdef inline void SoftRelax(SoftContext *ctx) noexcept nogil:
-    SoftSolve(ctx, 0)
-
-cdef void SoftAccumulate(SoftContext *ctx) noexcept nogil:
-    # The impulse a substep applied is its accumulated impulse after the
-    # relax pass (the warm start re-applies the previous one).
-    cdef int i, j, k
+cdef void SoftRelax(SoftContext *ctx, bint last) noexcept nogil:
+    # A relax pass: SoftSolve without bias. The substep's last also adds
+    # the impulse the substep applied, its accumulated impulse after the
+    # relax (the warm start re-applies the previous one), to the step's.
+    cdef int i, j
     cdef SoftContact *sc
-    SoftRun(ctx, SOFT_TASK_ACCUMULATE, 0, ctx.colorLanes[SOFT_GRAPH_COLORS], 0)
+    if not last:
+        SoftSolve(ctx, 0)
+        return
+    for i in range(SOFT_GRAPH_COLORS):
+        SoftRun(ctx, SOFT_TASK_RELAX_ACCUMULATE, ctx.colorLanes[i], ctx.colorLanes[i + 1], 0)
+    for i in range(ctx.overflowCount):
+        sc = &ctx.contacts[ctx.overflow[i]]
+        SoftSolveContact(ctx, sc, 0)
     for i in range(ctx.overflowCount):
         sc = &ctx.contacts[ctx.overflow[i]]
         for j in range(sc.count):
             sc.p[j].totalNormal += sc.p[j].normalImpulse
             sc.p[j].totalTangent += sc.p[j].tangentImpulse
-
-cdef void SoftAccumulateLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
-    cdef int i, j, k
-    cdef SoftLanes *ln
-    for i in range(begin, end):
-        ln = &ctx.lanes[i]
-        for j in range(ln.points):
-            for k in range(SOFT_LANES):
-                ln.totalNormal[j][k] += ln.normalImpulse[j][k]
-                ln.totalTangent[j][k] += ln.tangentImpulse[j][k]
 
 cdef void SoftUnpackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
     # The lanes' impulses back into their SoftContacts (restitution and the
@@ -1277,6 +1275,30 @@ cdef void SoftUnpackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
                 sp.maxNormalImpulse = ln.maxNormalImpulse[j][k]
                 sp.totalNormal = ln.totalNormal[j][k]
                 sp.totalTangent = ln.totalTangent[j][k]
+
+cdef void SoftStoreLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
+    # SoftUnpackLanes and SoftStoreImpulses in one, for a step without
+    # restitution (nothing else reads the SoftContacts' impulses).
+    cdef int i, j, k
+    cdef SoftLanes *ln
+    cdef SoftContact *sc
+    cdef cpContact *con
+    for i in range(begin, end):
+        ln = &ctx.lanes[i]
+        for k in range(SOFT_LANES):
+            if ln.src[k] < 0:
+                continue
+            sc = &ctx.contacts[ln.src[k]]
+            for j in range(sc.count):
+                con = &sc.arb.contacts[j]
+                con.jnAcc = ln.totalNormal[j][k]
+                con.jtAcc = ln.totalTangent[j][k]
+
+cdef void SoftStoreOverflow(SoftContext *ctx) noexcept nogil:
+    # The contacts solved one by one hold their impulses themselves.
+    cdef int i
+    for i in range(ctx.overflowCount):
+        SoftStoreImpulses(ctx, ctx.overflow[i], ctx.overflow[i] + 1)
 
 cdef void SoftApplyRestitution(SoftContext *ctx) noexcept nogil:
     # After the substeps: points that were approaching at the step's start
@@ -1497,11 +1519,12 @@ cdef enum:
     SOFT_TASK_INTEGRATE_POSITIONS
     SOFT_TASK_WARM_START
     SOFT_TASK_SOLVE
-    SOFT_TASK_ACCUMULATE
+    SOFT_TASK_RELAX_ACCUMULATE
     SOFT_TASK_PREPARE
     SOFT_TASK_NARROW
     SOFT_TASK_UNPACK
     SOFT_TASK_STORE
+    SOFT_TASK_STORE_LANES
     SOFT_TASK_FINISH_BODIES
     SOFT_TASK_PACK
     SOFT_TASK_UPDATE_SHAPES
@@ -1545,9 +1568,10 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
             SoftLanesWarmStart(&ctx.lanes[i], ctx.states)
     elif task == SOFT_TASK_SOLVE:
         for i in range(begin, end):
-            SoftLanesSolve(&ctx.lanes[i], ctx.states, ctx.inv_h, ctx.pushOut, flag)
-    elif task == SOFT_TASK_ACCUMULATE:
-        SoftAccumulateLanes(ctx, begin, end)
+            SoftLanesSolve(&ctx.lanes[i], ctx.states, ctx.inv_h, ctx.pushOut, flag, 0)
+    elif task == SOFT_TASK_RELAX_ACCUMULATE:
+        for i in range(begin, end):
+            SoftLanesSolve(&ctx.lanes[i], ctx.states, ctx.inv_h, ctx.pushOut, 0, 1)
     elif task == SOFT_TASK_PREPARE:
         SoftPrepareContactRange(ctx, begin, end)
     elif task == SOFT_TASK_NARROW:
@@ -1556,6 +1580,8 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
         SoftUnpackLanes(ctx, begin, end)
     elif task == SOFT_TASK_STORE:
         SoftStoreImpulses(ctx, begin, end)
+    elif task == SOFT_TASK_STORE_LANES:
+        SoftStoreLanes(ctx, begin, end)
     elif task == SOFT_TASK_FINISH_BODIES:
         SoftFinishBodies(ctx, begin, end)
     elif task == SOFT_TASK_PACK:
@@ -1735,6 +1761,7 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
         hertz = 0.25 * ctx.inv_h
     ctx.jointSoft = SoftMakeSoft(hertz, space.soft.jointDampingRatio, ctx.h)
     ctx.contactCount = 0
+    ctx.elastic = 0
     ctx.jointBodyCount = 0
     ctx.overflowCount = 0
     ctx.colorLanes[SOFT_GRAPH_COLORS] = 0
@@ -1780,12 +1807,15 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
             SoftJointsRefresh(&ctx)
             for r in range(SOFT_RELAX_ITERATIONS):
                 SoftJointsSolve(&ctx, 0)
-                SoftRelax(&ctx)
-            SoftAccumulate(&ctx)
+                SoftRelax(&ctx, r == SOFT_RELAX_ITERATIONS - 1)
             SoftProfileMark(SOFT_STAGE_RELAX)
-        SoftRun(&ctx, SOFT_TASK_UNPACK, 0, ctx.colorLanes[SOFT_GRAPH_COLORS], 0)
-        SoftApplyRestitution(&ctx)
-        SoftRun(&ctx, SOFT_TASK_STORE, 0, ctx.contactCount, 0)
+        if tamias_load(&ctx.elastic):
+            SoftRun(&ctx, SOFT_TASK_UNPACK, 0, ctx.colorLanes[SOFT_GRAPH_COLORS], 0)
+            SoftApplyRestitution(&ctx)
+            SoftRun(&ctx, SOFT_TASK_STORE, 0, ctx.contactCount, 0)
+        else:
+            SoftRun(&ctx, SOFT_TASK_STORE_LANES, 0, ctx.colorLanes[SOFT_GRAPH_COLORS], 0)
+            SoftStoreOverflow(&ctx)
         SoftRun(&ctx, SOFT_TASK_FINISH_BODIES, 1, ctx.bodyCount, 0)
         SoftFinishJoints(&ctx)
     if ctx.threaded:
