@@ -130,8 +130,7 @@ cdef enum:
     SOFT_SCRATCH_OVERFLOW
     SOFT_SCRATCH_JOINT_BODIES
     SOFT_SCRATCH_SOURCE       # each contact's index in space.arbiters
-    SOFT_SCRATCH_CANDIDATES   # the broad phase's pairs (SoftCollide)
-    SOFT_SCRATCH_PAIRS        # the last walk of the tree's pairs (SoftPair)
+    SOFT_SCRATCH_CANDIDATES   # the broad phase's pairs (SoftCollide), kept between steps
     SOFT_SCRATCH_COUNT
 
 # (cpSoftScratch holds 12 buffers.)
@@ -156,13 +155,6 @@ cdef void *_reserve(cpSpace *space, int which, int need, size_t size) noexcept n
 
 
 # -- the step's context -----------------------------------------------------------------
-
-# A pair as the broad phase's walk reported it, kept for the steps after
-# that leave the tree as it was.
-cdef struct SoftPair:
-    cpShape *a
-    cpShape *b
-    cpPairSlot *slot
 
 # A pair the broad phase reported, and its narrow phase (SoftCollide).
 cdef struct SoftCandidate:
@@ -192,7 +184,7 @@ cdef struct SoftContext:
     volatile long shapesUpdated   # by SoftUpdateShapes
     int *laneSlots            # contact i goes to lane laneSlots[i] // SOFT_LANES (-1: overflow)
     int overflowCount
-    SoftCandidate *candidates # this step's pairs from the broad phase
+    SoftCandidate *candidates # this step's pairs from the broad phase (or the last walk's)
     int candidateCount
     int candidateCap
     bint updateInNarrow       # no begin or pre-solve callbacks: arbiters updated in parallel
@@ -295,56 +287,28 @@ def _profile(on):
 # same whoever ran which pair. A begin or pre-solve callback therefore sees
 # every pair's narrow phase done.
 
-cdef void SoftConsiderPair(SoftContext *ctx, cpShape *a, cpShape *b,
-                           cpPairSlot *slot) noexcept nogil:
-    # The cheap rejection here (most pairs of the broad phase, whose boxes
-    # are widened for continuous collision, go no further); the narrow phase
-    # of the others later.
+cdef void SoftCollectPair(void *a, void *b, cpPairSlot *slot, void *data) noexcept nogil:
+    # A pair of the walk, for the narrow phase. The candidates are kept for
+    # the next steps while every pair has its slot (pairs new this step have
+    # none) and no allocation failed.
+    cdef SoftContext *ctx = <SoftContext *>data
     cdef SoftCandidate *c
     cdef int n = ctx.candidateCount
-    cdef cpFloat margin
-    if cpSpaceRejectPair(ctx.space, a, b, &margin):
-        return
+    if slot == NULL:
+        ctx.keepingPairs = 0
     if n >= ctx.candidateCap:
         ctx.candidates = <SoftCandidate *>_reserve(ctx.space, SOFT_SCRATCH_CANDIDATES, n + 1,
                                                    sizeof(SoftCandidate))
         if ctx.candidates == NULL:
             ctx.candidateCap = 0
+            ctx.keepingPairs = 0
             return  # out of memory: the flag is up, the pair is skipped
         ctx.candidateCap = ctx.space.softScratch.cap[SOFT_SCRATCH_CANDIDATES]
     c = &ctx.candidates[n]
-    c.a = a
-    c.b = b
+    c.a = <cpShape *>a
+    c.b = <cpShape *>b
     c.slot = slot
-    if slot != NULL:
-        c.id = slot.id
-        c.guess = <cpArbiter *>slot.arbiter
-    else:
-        c.id = 0
-        c.guess = NULL
-    c.margin = margin
     ctx.candidateCount = n + 1
-
-cdef void SoftCollectPair(void *a, void *b, cpPairSlot *slot, void *data) noexcept nogil:
-    # A pair of the walk: kept for the next steps (while the walk can be
-    # kept: every pair has its slot, no allocation failed), then considered.
-    cdef SoftContext *ctx = <SoftContext *>data
-    cdef cpSoftScratch *scratch = &ctx.space.softScratch
-    cdef SoftPair *pairs
-    cdef int n = scratch.pairCount
-    if ctx.keepingPairs:
-        if slot == NULL:
-            ctx.keepingPairs = 0
-        else:
-            pairs = <SoftPair *>_reserve(ctx.space, SOFT_SCRATCH_PAIRS, n + 1, sizeof(SoftPair))
-            if pairs == NULL:
-                ctx.keepingPairs = 0
-            else:
-                pairs[n].a = <cpShape *>a
-                pairs[n].b = <cpShape *>b
-                pairs[n].slot = slot
-                scratch.pairCount = n + 1
-    SoftConsiderPair(ctx, <cpShape *>a, <cpShape *>b, slot)
 
 # Off only in tests, which check that the guesses change nothing.
 cdef bint _use_guesses = 1
@@ -362,22 +326,37 @@ cdef inline bint SoftGuessHolds(const cpArbiter *arb, const cpCollisionInfo *inf
         (arb.a == info.a and arb.b == info.b) or (arb.a == info.b and arb.b == info.a))
 
 cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
-    # Also finds a touching pair's cached arbiter: the cache is only read
-    # here (pairs new this step get theirs afterwards, on the calling thread).
-    # The broad phase's pair remembers it from the last step; the cache is
-    # asked only when that guess is wrong (the answer is the same).
+    # First the cheap rejection (most pairs of the broad phase, whose boxes
+    # are widened for continuous collision, go no further). Also finds a
+    # touching pair's cached arbiter: the cache is only read here (pairs new
+    # this step get theirs afterwards, on the calling thread). The broad
+    # phase's pair remembers it from the last step; the cache is asked only
+    # when that guess is wrong (the answer is the same).
     cdef int i
     cdef SoftCandidate *c
+    cdef cpPairSlot *slot
     cdef const cpShape *pair[2]
     for i in range(begin, end):
-        if i + 2 < end:
-            tamias_prefetch(ctx.candidates[i + 2].guess)
+        if i + 4 < end:
+            tamias_prefetch(ctx.candidates[i + 4].slot)
+        if i + 2 < end and ctx.candidates[i + 2].slot != NULL:
+            tamias_prefetch(ctx.candidates[i + 2].slot.arbiter)
         c = &ctx.candidates[i]
-        c.info = cpCollideSoft(c.a, c.b, c.id, c.contacts, c.margin)
-        if c.slot != NULL:
-            c.slot.id = c.info.id
+        slot = c.slot
         c.arb = NULL
         c.updated = 0
+        if slot != NULL:
+            c.id = slot.id
+            c.guess = <cpArbiter *>slot.arbiter
+        else:
+            c.id = 0
+            c.guess = NULL
+        if cpSpaceRejectPair(ctx.space, c.a, c.b, &c.margin):
+            c.info.count = 0
+            continue
+        c.info = cpCollideSoft(c.a, c.b, c.id, c.contacts, c.margin)
+        if slot != NULL:
+            slot.id = c.info.id
         if c.info.count > 0:
             if _use_guesses and SoftGuessHolds(c.guess, &c.info):
                 c.arb = c.guess
@@ -386,8 +365,8 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
                 pair[1] = c.info.b
                 c.arb = <cpArbiter *>cpHashSetFind(ctx.space.cachedArbiters,
                     CP_HASH_PAIR(<cpHashValue>c.info.a, <cpHashValue>c.info.b), pair)
-                if c.slot != NULL:
-                    c.slot.arbiter = c.arb
+                if slot != NULL:
+                    slot.arbiter = c.arb
             if c.arb != NULL and ctx.updateInNarrow:
                 # What cpSpaceAcceptCollision would do first, done here as
                 # no callback runs before it that could change its inputs
@@ -425,8 +404,6 @@ cdef void SoftUpdateShapes(SoftContext *ctx, int begin, int end) noexcept nogil:
 cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     cdef cpSpace *space = ctx.space
     cdef unsigned long long known, walked
-    cdef SoftPair *pairs
-    cdef int kept
     cdef SoftCandidate *c
     cdef cpContact *contacts
     cdef cpArbiter *arb
@@ -443,25 +420,23 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     ctx.candidateCap = space.softScratch.cap[SOFT_SCRATCH_CANDIDATES]
     ctx.candidateCount = 0
     ctx.updateInNarrow = not cpSpaceHasHandlers(space, 1, 1, 0)
-    # The walk of the tree's pairs is kept; while no leaf leaves its box and
-    # nothing is added or removed, the next steps take its pairs from there.
+    # The last walk of the tree's pairs is kept in the candidates: while no
+    # leaf leaves its box and nothing is added or removed, the next steps
+    # take their pairs from there.
     known = space.softScratch.pairsVersion if _keep_pairs else 0
-    kept = space.softScratch.pairCount
-    ctx.keepingPairs = 1
-    space.softScratch.pairCount = 0
     walked = known
+    ctx.keepingPairs = 1
     if not cpBBTreeReindexQuerySlots(space.dynamicShapes, SoftCollectPair, ctx, &walked):
         # A spatial hash: pair by pair, as the chipmunk solver.
+        space.softScratch.pairsVersion = 0
         cpSpatialIndexReindexQuery(space.dynamicShapes, cpSpaceCollideShapes, space)
         return
     if walked == known and known != 0:
         tamias_add(&_kept_walks, 1)
-        pairs = <SoftPair *>space.softScratch.buf[SOFT_SCRATCH_PAIRS]
-        for i in range(kept):
-            SoftConsiderPair(ctx, pairs[i].a, pairs[i].b, pairs[i].slot)
-        space.softScratch.pairCount = kept
+        ctx.candidateCount = space.softScratch.pairCount
     else:
         space.softScratch.pairsVersion = walked if ctx.keepingPairs else 0
+        space.softScratch.pairCount = ctx.candidateCount
     SoftProfileMark(SOFT_STAGE_BROAD_PHASE)
     SoftRun(ctx, SOFT_TASK_NARROW, 0, ctx.candidateCount, 0)
     SoftProfileMark(SOFT_STAGE_NARROW_PHASE)

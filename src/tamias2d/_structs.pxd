@@ -373,8 +373,8 @@ cdef struct cpSoftSettings:
 cdef struct cpSoftScratch:
     void *buf[12]                # indexed by _soft_step's SOFT_SCRATCH_* (< 12)
     int cap[12]                  # elements each buffer has room for
-    # The broad phase's last walk, kept in SOFT_SCRATCH_PAIRS: its pair count
-    # and the dynamic tree's version after it (0: no walk kept).
+    # The broad phase's last walk, kept in the candidates buffer: its pair
+    # count and the dynamic tree's version after it (0: no walk kept).
     int pairCount
     unsigned long long pairsVersion
 
