@@ -25,6 +25,18 @@ cdef inline cpConstraint *cpConstraintNext(cpConstraint *node, cpBody *body) noe
 cdef inline cpArray *cpSpaceArrayForBodyType(cpSpace *space, cpBodyType type) noexcept nogil:
     return space.staticBodies if type == CP_BODY_TYPE_STATIC else space.dynamicBodies
 
+# Every stamp and every removal from the cache goes through these two, so
+# that space.arbitersStamped stays the number of cached arbiters touched in
+# this step (an arbiter uncached when stamped would leave it too high).
+cdef inline void cpSpaceStampArbiter(cpSpace *space, cpArbiter *arb) noexcept nogil:
+    if arb.stamp != space.stamp and arb.cached:
+        space.arbitersStamped += 1
+    arb.stamp = space.stamp
+
+cdef inline void cpSpaceArbiterLeavesCache(cpSpace *space, cpArbiter *arb) noexcept nogil:
+    if arb.stamp == space.stamp and arb.cached:
+        space.arbitersStamped -= 1
+
 cdef inline void cpSpaceUncacheArbiter(cpSpace *space, cpArbiter *arb) noexcept nogil:
     cdef const cpShape *shape_pair[2]
     shape_pair[0] = arb.a
@@ -32,6 +44,7 @@ cdef inline void cpSpaceUncacheArbiter(cpSpace *space, cpArbiter *arb) noexcept 
     cdef cpHashValue arbHashID = CP_HASH_PAIR(<cpHashValue>arb.a, <cpHashValue>arb.b)
     cdef cpArbiter *removed = <cpArbiter *>cpHashSetRemove(space.cachedArbiters, arbHashID, shape_pair)
     if removed != NULL:
+        cpSpaceArbiterLeavesCache(space, removed)
         removed.cached = 0
     cpArrayDeleteObj(space.arbiters, arb)
 

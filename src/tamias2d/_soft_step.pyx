@@ -1710,6 +1710,7 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     if dt == 0.0:
         return
     space.stamp += 1
+    space.arbitersStamped = 0
     prev_dt = space.curr_dt
     space.curr_dt = dt
 

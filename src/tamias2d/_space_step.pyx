@@ -22,7 +22,7 @@ from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, 
     CP_ARBITER_STATE_IGNORE, CP_ARBITER_STATE_CACHED)
 from tamias2d._containers cimport (cpcalloc, cpfree, cpArrayPush, cpArrayPop,
     cpArrayDeleteObj, cpArrayContains, cpHashSetInsert, cpHashSetFind, cpHashSetEach,
-    cpHashSetFilter)
+    cpHashSetFilter, cpHashSetCount)
 from tamias2d._spatialindex cimport (cpSpatialIndexEach, cpSpatialIndexInsert, cpSpatialIndexRemove,
     cpSpatialIndexReindexQuery)
 from tamias2d.vector cimport cpVect, cpBB, cpvsub, cpvlengthsq, cpBBIntersects
@@ -34,7 +34,7 @@ from tamias2d.arbiter cimport (cpArbiterInit, cpArbiterUpdate, cpArbiterPreStep,
     cpArbiterApplyCachedImpulse, cpArbiterApplyImpulse, cpArbiterUnthread, cpCollisionDoNothing)
 from tamias2d.constraints cimport tamias_constraint_clear_impulse
 from tamias2d._private cimport (cpArbiterThreadForBody, cpArbiterNext, cpConstraintNext,
-    cpSpaceArrayForBodyType, cpSpaceUncacheArbiter, cpCallHandlers,
+    cpSpaceArrayForBodyType, cpSpaceUncacheArbiter, cpCallHandlers, cpSpaceStampArbiter,
     PHASE_BEGIN, PHASE_PRE_SOLVE, PHASE_POST_SOLVE, PHASE_SEPARATE)
 
 
@@ -320,7 +320,7 @@ cdef cpArbiter *cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
         if arb.state != CP_ARBITER_STATE_IGNORE:
             arb.state = CP_ARBITER_STATE_NORMAL
 
-    arb.stamp = space.stamp
+    cpSpaceStampArbiter(space, arb)
     return arb
 
 # Per-step filter of the arbiter cache: separate callbacks and expiry.
@@ -367,6 +367,7 @@ cdef void cpSpaceStep(cpSpace *space, cpFloat dt) noexcept nogil:
     if dt == 0.0:
         return
     space.stamp += 1
+    space.arbitersStamped = 0
     cdef cpFloat prev_dt = space.curr_dt
     space.curr_dt = dt
     cdef int collided
@@ -428,7 +429,15 @@ cdef void StageCollide(cpSpace *space) noexcept nogil:
 
 # Separate callbacks for pairs no longer touching; expired arbiters return
 # to the pool.
+# Off only in tests, which check that skipping the filter changes nothing.
+cdef bint _skip_idle_filter = 1
+
 cdef void StageFilterArbiterCache(cpSpace *space) noexcept nogil:
+    # Not when every cached arbiter was touched in this step (a pile at
+    # rest): the filter would neither separate nor expire any of them.
+    if (_skip_idle_filter and space.collisionPersistence > 0
+            and space.arbitersStamped == <int>cpHashSetCount(space.cachedArbiters)):
+        return
     cpHashSetFilter(space.cachedArbiters, cpSpaceArbiterSetFilter, space)
 
 cdef void StagePreStep(cpSpace *space, cpFloat dt) noexcept nogil:
@@ -576,7 +585,7 @@ cdef void cpSpaceActivateBody(cpSpace *space, cpBody *body) noexcept nogil:
             arbHashID = CP_HASH_PAIR(<cpHashValue>arb.a, <cpHashValue>arb.b)
             if cpHashSetInsert(space.cachedArbiters, arbHashID, shape_pair, NULL, arb) == arb:
                 arb.cached = 1
-            arb.stamp = space.stamp
+            cpSpaceStampArbiter(space, arb)
             cpArrayPush(space.arbiters, arb)
             cpfree(contacts)
         arb = cpArbiterNext(arb, body)
@@ -1024,3 +1033,12 @@ cdef void _scanOrphans(void *obj, void *data) noexcept nogil:
     if scan.bad == NULL and not (body.m > 0.0 and body.m < INFINITY and body.i > 0.0):
         scan.bad = body
 
+
+def _skip_idle_arbiter_filter(on=None):
+    """Whether a step whose cached arbiters were all touched skips the
+    arbiter cache's filter (and, given `on`, set it first; for tests, which
+    check that filtering every step changes nothing)."""
+    global _skip_idle_filter
+    if on is not None:
+        _skip_idle_filter = bool(on)
+    return bool(_skip_idle_filter)

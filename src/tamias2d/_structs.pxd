@@ -394,6 +394,9 @@ cdef struct cpSpace:
     cpTimestamp collisionPersistence
     cpDataPointer userData      # borrowed pointer to the Python Space
     cpTimestamp stamp
+    # Not Munk2D's: how many cached arbiters have this step's stamp (see
+    # cpSpaceStampArbiter), so that the cache filter can tell it has no work.
+    int arbitersStamped
     cpFloat curr_dt
     cpArray *dynamicBodies
     cpArray *staticBodies

@@ -83,7 +83,7 @@ from tamias2d.errors import (IllegalBody, IllegalShape, SpaceLocked, AlreadyInSp
 from tamias2d._threadguard cimport (tamias_wait_for_step, tamias_begin_step,
     tamias_end_step, tamias_step_lock_new, tamias_step_lock_free)
 from tamias2d._private cimport (cpConstraintNext, cpSpaceArrayForBodyType,
-    cpCallHandlers, PHASE_SEPARATE)
+    cpCallHandlers, PHASE_SEPARATE, cpSpaceArbiterLeavesCache)
 from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, cpSpaceGetPostStepCallback,
     cpSpaceAddPostStepCallback, cpSpaceStep, cpShapeUpdateFunc, cpSpaceWakeComponent, _bodyNonFinite,
     _firstNonFiniteBody, tamias_first_non_finite_body, _forgetNonFiniteImpulses, OrphanScan,
@@ -364,6 +364,7 @@ cdef cpBool cachedArbitersFilter(void *elt, void *data) noexcept nogil:
         cpArbiterUnthread(arb)
         cpArrayDeleteObj(context.space.arbiters, arb)
         cpArrayPush(context.space.pooledArbiters, arb)
+        cpSpaceArbiterLeavesCache(context.space, arb)
         arb.cached = 0
         # A pooled arbiter forgets its shapes so that a stale Python Arbiter
         # view can tell (the removed shape may be freed).
