@@ -130,7 +130,9 @@ cdef enum:
     SOFT_SCRATCH_OVERFLOW
     SOFT_SCRATCH_JOINT_BODIES
     SOFT_SCRATCH_SOURCE       # each contact's index in space.arbiters
-    SOFT_SCRATCH_CANDIDATES   # the broad phase's pairs (SoftCollide), kept between steps
+    SOFT_SCRATCH_CANDIDATES   # the narrow phase of each pair (SoftCollide)
+    SOFT_SCRATCH_PAIRS        # the broad phase's pairs, kept between steps
+    SOFT_SCRATCH_TOUCHING     # each pair's narrow phase found contacts
     SOFT_SCRATCH_COUNT
 
 # (cpSoftScratch holds 12 buffers.)
@@ -156,11 +158,15 @@ cdef void *_reserve(cpSpace *space, int which, int need, size_t size) noexcept n
 
 # -- the step's context -----------------------------------------------------------------
 
-# A pair the broad phase reported, and its narrow phase (SoftCollide).
-cdef struct SoftCandidate:
+# A pair the broad phase reported (kept for the next steps while the tree
+# stays as it was), and its narrow phase (SoftCollide), in arrays of the
+# same index. Only a pair that is not rejected writes its SoftCandidate.
+cdef struct SoftPair:
     cpShape *a
     cpShape *b
     cpPairSlot *slot          # what the broad phase keeps for the pair (NULL: nothing)
+
+cdef struct SoftCandidate:
     cpCollisionID id
     cpArbiter *guess          # the slot's arbiter from an earlier step, unchecked
     cpFloat margin            # the pair's (cpSpaceRejectPair)
@@ -184,9 +190,11 @@ cdef struct SoftContext:
     volatile long shapesUpdated   # by SoftUpdateShapes
     int *laneSlots            # contact i goes to lane laneSlots[i] // SOFT_LANES (-1: overflow)
     int overflowCount
-    SoftCandidate *candidates # this step's pairs from the broad phase (or the last walk's)
-    int candidateCount
-    int candidateCap
+    SoftPair *pairs           # this step's pairs from the broad phase (or the last walk's)
+    int pairCount
+    int pairCap
+    SoftCandidate *candidates # their narrow phase
+    unsigned char *touching   # 1: the pair has contacts
     bint updateInNarrow       # no begin or pre-solve callbacks: arbiters updated in parallel
     bint keepingPairs         # the broad phase's walk is being kept (SoftCollectPair)
     volatile long elastic     # a contact has restitution (set by SoftPrepareContactRange)
@@ -288,27 +296,29 @@ def _profile(on):
 # every pair's narrow phase done.
 
 cdef void SoftCollectPair(void *a, void *b, cpPairSlot *slot, void *data) noexcept nogil:
-    # A pair of the walk, for the narrow phase. The candidates are kept for
-    # the next steps while every pair has its slot (pairs new this step have
+    # A pair of the walk, for the narrow phase. The pairs are kept for the
+    # next steps while every pair has its slot (pairs new this step have
     # none) and no allocation failed.
     cdef SoftContext *ctx = <SoftContext *>data
-    cdef SoftCandidate *c
-    cdef int n = ctx.candidateCount
+    cdef SoftPair *pair
+    cdef SoftPair *grown
+    cdef int n = ctx.pairCount
     if slot == NULL:
         ctx.keepingPairs = 0
-    if n >= ctx.candidateCap:
-        ctx.candidates = <SoftCandidate *>_reserve(ctx.space, SOFT_SCRATCH_CANDIDATES, n + 1,
-                                                   sizeof(SoftCandidate))
-        if ctx.candidates == NULL:
-            ctx.candidateCap = 0
+    if n >= ctx.pairCap:
+        grown = <SoftPair *>_reserve(ctx.space, SOFT_SCRATCH_PAIRS, n + 1, sizeof(SoftPair))
+        if grown == NULL:
+            # Out of memory: the flag is up, the pair is skipped (the pairs
+            # so far stay where they were).
             ctx.keepingPairs = 0
-            return  # out of memory: the flag is up, the pair is skipped
-        ctx.candidateCap = ctx.space.softScratch.cap[SOFT_SCRATCH_CANDIDATES]
-    c = &ctx.candidates[n]
-    c.a = <cpShape *>a
-    c.b = <cpShape *>b
-    c.slot = slot
-    ctx.candidateCount = n + 1
+            return
+        ctx.pairs = grown
+        ctx.pairCap = ctx.space.softScratch.cap[SOFT_SCRATCH_PAIRS]
+    pair = &ctx.pairs[n]
+    pair.a = <cpShape *>a
+    pair.b = <cpShape *>b
+    pair.slot = slot
+    ctx.pairCount = n + 1
 
 # Off only in tests, which check that the guesses change nothing.
 cdef bint _use_guesses = 1
@@ -333,28 +343,32 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
     # phase's pair remembers it from the last step; the cache is asked only
     # when that guess is wrong (the answer is the same).
     cdef int i
+    cdef SoftPair *p
     cdef SoftCandidate *c
     cdef cpPairSlot *slot
+    cdef cpFloat margin
     cdef const cpShape *pair[2]
     for i in range(begin, end):
         if i + 4 < end:
-            tamias_prefetch(ctx.candidates[i + 4].slot)
-        if i + 2 < end and ctx.candidates[i + 2].slot != NULL:
-            tamias_prefetch(ctx.candidates[i + 2].slot.arbiter)
+            tamias_prefetch(ctx.pairs[i + 4].slot)
+        p = &ctx.pairs[i]
+        if cpSpaceRejectPair(ctx.space, p.a, p.b, &margin):
+            ctx.touching[i] = 0
+            continue
         c = &ctx.candidates[i]
-        slot = c.slot
+        slot = p.slot
+        c.margin = margin
         c.arb = NULL
         c.updated = 0
         if slot != NULL:
             c.id = slot.id
             c.guess = <cpArbiter *>slot.arbiter
+            tamias_prefetch(c.guess)
         else:
             c.id = 0
             c.guess = NULL
-        if cpSpaceRejectPair(ctx.space, c.a, c.b, &c.margin):
-            c.info.count = 0
-            continue
-        c.info = cpCollideSoft(c.a, c.b, c.id, c.contacts, c.margin)
+        c.info = cpCollideSoft(p.a, p.b, c.id, c.contacts, margin)
+        ctx.touching[i] = c.info.count > 0
         if slot != NULL:
             slot.id = c.info.id
         if c.info.count > 0:
@@ -407,7 +421,7 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     cdef SoftCandidate *c
     cdef cpContact *contacts
     cdef cpArbiter *arb
-    cdef int i
+    cdef int i, n
     cpSpacePushFreshContactBuffer(space)
     # The awake bodies' shapes are the dynamic index's; should they not be
     # (the counts differ), the index's walk does it again, as the chipmunk
@@ -416,13 +430,13 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     SoftRun(ctx, SOFT_TASK_UPDATE_SHAPES, 0, space.dynamicBodies.num, 0)
     if tamias_load(&ctx.shapesUpdated) != cpSpatialIndexCount(space.dynamicShapes):
         cpSpatialIndexEach(space.dynamicShapes, cpShapeUpdateFunc, NULL)
-    ctx.candidates = <SoftCandidate *>space.softScratch.buf[SOFT_SCRATCH_CANDIDATES]
-    ctx.candidateCap = space.softScratch.cap[SOFT_SCRATCH_CANDIDATES]
-    ctx.candidateCount = 0
+    ctx.pairs = <SoftPair *>space.softScratch.buf[SOFT_SCRATCH_PAIRS]
+    ctx.pairCap = space.softScratch.cap[SOFT_SCRATCH_PAIRS]
+    ctx.pairCount = 0
     ctx.updateInNarrow = not cpSpaceHasHandlers(space, 1, 1, 0)
-    # The last walk of the tree's pairs is kept in the candidates: while no
-    # leaf leaves its box and nothing is added or removed, the next steps
-    # take their pairs from there.
+    # The last walk of the tree's pairs is kept: while no leaf leaves its
+    # box and nothing is added or removed, the next steps take their pairs
+    # from there.
     known = space.softScratch.pairsVersion if _keep_pairs else 0
     walked = known
     ctx.keepingPairs = 1
@@ -433,21 +447,27 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
         return
     if walked == known and known != 0:
         tamias_add(&_kept_walks, 1)
-        ctx.candidateCount = space.softScratch.pairCount
+        ctx.pairCount = space.softScratch.pairCount
     else:
         space.softScratch.pairsVersion = walked if ctx.keepingPairs else 0
-        space.softScratch.pairCount = ctx.candidateCount
+        space.softScratch.pairCount = ctx.pairCount
+    n = ctx.pairCount
+    ctx.candidates = <SoftCandidate *>_reserve(space, SOFT_SCRATCH_CANDIDATES, n,
+                                               sizeof(SoftCandidate))
+    ctx.touching = <unsigned char *>_reserve(space, SOFT_SCRATCH_TOUCHING, n, 1)
+    if ctx.candidates == NULL or ctx.touching == NULL:
+        return  # out of memory: the flag is up, no pair is collided
     SoftProfileMark(SOFT_STAGE_BROAD_PHASE)
-    SoftRun(ctx, SOFT_TASK_NARROW, 0, ctx.candidateCount, 0)
+    SoftRun(ctx, SOFT_TASK_NARROW, 0, n, 0)
     SoftProfileMark(SOFT_STAGE_NARROW_PHASE)
-    for i in range(ctx.candidateCount):
+    for i in range(n):
         # Fetch the arbiter of a pair a few places on (or, for a pair new
         # this step, its slot of the arbiter cache).
-        if i + 4 < ctx.candidateCount:
+        if i + 4 < n and ctx.touching[i + 4]:
             SoftPrefetchArbiter(space, &ctx.candidates[i + 4])
-        c = &ctx.candidates[i]
-        if c.info.count == 0:
+        if not ctx.touching[i]:
             continue
+        c = &ctx.candidates[i]
         contacts = cpContactBufferGetArray(space)
         if contacts == NULL:
             # Out of memory: the flag is up, the pair is skipped.
@@ -460,9 +480,10 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
         if c.updated:
             c.arb.contacts = contacts
         cpSpacePushContacts(space, c.info.count)
-        arb = cpSpaceAcceptCollision(space, c.a, c.b, &c.info, c.arb, c.updated)
-        if c.slot != NULL and c.arb == NULL:
-            c.slot.arbiter = arb    # new this step: next step's guess
+        arb = cpSpaceAcceptCollision(space, ctx.pairs[i].a, ctx.pairs[i].b, &c.info, c.arb,
+                                     c.updated)
+        if ctx.pairs[i].slot != NULL and c.arb == NULL:
+            ctx.pairs[i].slot.arbiter = arb    # new this step: next step's guess
 
 
 # -- gather ----------------------------------------------------------------------------
