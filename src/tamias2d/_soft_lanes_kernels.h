@@ -11,12 +11,6 @@
 #define S(field, value) soft_v_store((field), k, (value))
 #define G(idx, member) soft_v_gather(st, (idx), k, offsetof(SoftState, member))
 #define P(idx, w, member, value) soft_v_scatter(st, (idx), (w), k, offsetof(SoftState, member), (value))
-/* cross(r, n) and cross(r, perp(n)) = r . n, from the anchor r and the lane's
- * normal (nx, ny): the lanes keep the anchors only, which is fewer bytes to
- * stream per pass; the arithmetic is SoftPrepareContactRange's, so the same
- * bits. */
-#define RN(rx, ry) ((rx) * ny - (ry) * nx)
-#define RT(rx, ry) ((rx) * nx + (ry) * ny)
 
 static inline void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftState *st) {
     int k, j;
@@ -27,16 +21,15 @@ static inline void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftState *st) {
         V vbx = G(c->ib, vx), vby = G(c->ib, vy), wb = G(c->ib, w);
         for (j = 0; j < c->points; j++) {
             /* P = normalImpulse n + tangentImpulse perp(n) */
-            V rAx = L(c->rAx[j]), rAy = L(c->rAy[j]), rBx = L(c->rBx[j]), rBy = L(c->rBy[j]);
             V xn = L(c->normalImpulse[j]), xt = L(c->tangentImpulse[j]);
             V px = xn * nx - xt * ny;
             V py = xn * ny + xt * nx;
             vax = vax - mA * px;
             vay = vay - mA * py;
-            wa = wa - iA * (xn * RN(rAx, rAy) + xt * RT(rAx, rAy));
+            wa = wa - iA * (xn * L(c->rnA[j]) + xt * L(c->rtA[j]));
             vbx = vbx + mB * px;
             vby = vby + mB * py;
-            wb = wb + iB * (xn * RN(rBx, rBy) + xt * RT(rBx, rBy));
+            wb = wb + iB * (xn * L(c->rnB[j]) + xt * L(c->rtB[j]));
         }
         P(c->ia, c->wa, vx, vax); P(c->ia, c->wa, vy, vay); P(c->ia, c->wa, w, wa);
         P(c->ib, c->wb, vx, vbx); P(c->ib, c->wb, vy, vby); P(c->ib, c->wb, w, wb);
@@ -55,7 +48,7 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
         V vbx = G(c->ib, vx), vby = G(c->ib, vy), wb = G(c->ib, w);
         V qcA = G(c->ia, qc), qsA = G(c->ia, qs), qcB = G(c->ib, qc), qsB = G(c->ib, qs);
         V ddx = G(c->ib, dpx) - G(c->ia, dpx), ddy = G(c->ib, dpy) - G(c->ia, dpy);
-        V bias[2], gamma[2], rnA[2], rnB[2], rtA[2], rtB[2];
+        V bias[2], gamma[2];
         V lin, x01, x02, k11, k12, k22, a11, a22, q1, q2, det, x1, x2, y1, z2, n1, n2, d1, d2, imp;
         M ok1, ok2, ok3, ok4;
         int points = c->points;
@@ -67,10 +60,6 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
             V prAx = qcA * rAx - qsA * rAy, prAy = qsA * rAx + qcA * rAy;
             V prBx = qcB * rBx - qsB * rBy, prBy = qsB * rBx + qcB * rBy;
             V s = (ddx + (prBx - prAx)) * nx + (ddy + (prBy - prAy)) * ny + L(c->base[j]);
-            rnA[j] = RN(rAx, rAy);
-            rnB[j] = RN(rBx, rBy);
-            rtA[j] = RT(rAx, rAy);
-            rtB[j] = RT(rBx, rBy);
             M spec = V_GT(s, zero);
             if (useBias) {
                 V b = L(c->biasRate[j]) * s;
@@ -88,7 +77,7 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
             V m1;
             x01 = L(c->normalImpulse[0]);
             k11 = L(c->k11);
-            q1 = lin + wb * rnB[0] - wa * rnA[0] + bias[0];
+            q1 = lin + wb * L(c->rnB[0]) - wa * L(c->rnA[0]) + bias[0];
             n1 = x01 - (q1 + k11 * gamma[0] * x01) / (k11 * (one + gamma[0]));
             n1 = V_SEL(V_LT(n1, zero), zero, n1);
             S(c->normalImpulse[0], n1);
@@ -97,10 +86,10 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
             d1 = n1 - x01;
             vax = vax - mA * (d1 * nx);
             vay = vay - mA * (d1 * ny);
-            wa = wa - iA * (rnA[0] * d1);
+            wa = wa - iA * (L(c->rnA[0]) * d1);
             vbx = vbx + mB * (d1 * nx);
             vby = vby + mB * (d1 * ny);
-            wb = wb + iB * (rnB[0] * d1);
+            wb = wb + iB * (L(c->rnB[0]) * d1);
             goto friction;
         }
         /* Both normal rows at once (the 2x2 LCP, Box2D 2.x's cases). */
@@ -109,8 +98,8 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
         k11 = L(c->k11); k12 = L(c->k12); k22 = L(c->k22);
         a11 = k11 * (one + gamma[0]);
         a22 = k22 * (one + gamma[1]);
-        q1 = lin + wb * rnB[0] - wa * rnA[0] + bias[0] - (k11 * x01 + k12 * x02);
-        q2 = lin + wb * rnB[1] - wa * rnA[1] + bias[1] - (k12 * x01 + k22 * x02);
+        q1 = lin + wb * L(c->rnB[0]) - wa * L(c->rnA[0]) + bias[0] - (k11 * x01 + k12 * x02);
+        q2 = lin + wb * L(c->rnB[1]) - wa * L(c->rnA[1]) + bias[1] - (k12 * x01 + k22 * x02);
         det = a11 * a22 - k12 * k12;
         x1 = (k12 * q2 - a22 * q1) / det;
         x2 = (k12 * q1 - a11 * q2) / det;
@@ -138,18 +127,21 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
         imp = d1 + d2;
         vax = vax - mA * (imp * nx);
         vay = vay - mA * (imp * ny);
-        wa = wa - iA * (rnA[0] * d1 + rnA[1] * d2);
+        wa = wa - iA * (L(c->rnA[0]) * d1 + L(c->rnA[1]) * d2);
         vbx = vbx + mB * (imp * nx);
         vby = vby + mB * (imp * ny);
-        wb = wb + iB * (rnB[0] * d1 + rnB[1] * d2);
+        wb = wb + iB * (L(c->rnB[0]) * d1 + L(c->rnB[1]) * d2);
     friction:
         if (!useBias) {
             /* Friction in the relax pass only; tangent t = perp(n). */
             V mu = L(c->friction), surfaceT = L(c->surfaceT);
             for (j = 0; j < 2; j++) {
+                V rtA, rtB;
                 if (j == 1 && points == 1)
                     break;
-                V vt = ((vby - vay) * nx - (vbx - vax) * ny) + wb * rtB[j] - wa * rtA[j] + surfaceT;
+                rtA = L(c->rtA[j]);
+                rtB = L(c->rtB[j]);
+                V vt = ((vby - vay) * nx - (vbx - vax) * ny) + wb * rtB - wa * rtA + surfaceT;
                 V old = L(c->tangentImpulse[j]);
                 V maxF = mu * L(c->normalImpulse[j]);
                 V negMaxF = -maxF;
@@ -159,10 +151,10 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
                 imp = tImp - old;
                 vax = vax + mA * (imp * ny);
                 vay = vay - mA * (imp * nx);
-                wa = wa - iA * (imp * rtA[j]);
+                wa = wa - iA * (imp * rtA);
                 vbx = vbx - mB * (imp * ny);
                 vby = vby + mB * (imp * nx);
-                wb = wb + iB * (imp * rtB[j]);
+                wb = wb + iB * (imp * rtB);
             }
             if (accumulate) {
                 for (j = 0; j < points; j++) {
@@ -180,8 +172,6 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
 #undef S
 #undef G
 #undef P
-#undef RN
-#undef RT
 
 /* The instantiation's type and accessor macros, for the next one (the V_*
  * operations are _soft_lanes.h's to undefine). */
