@@ -349,8 +349,6 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef cpFloat margin
     cdef const cpShape *pair[2]
     for i in range(begin, end):
-        if i + 4 < end:
-            tamias_prefetch(ctx.pairs[i + 4].slot)
         p = &ctx.pairs[i]
         if cpSpaceRejectPair(ctx.space, p.a, p.b, &margin):
             ctx.touching[i] = 0

@@ -230,8 +230,15 @@ cdef cpBool cpSpaceRejectPair(cpSpace *space, cpShape *a, cpShape *b,
                               cpFloat *margin_out) noexcept nogil:
     cdef cpFloat margin = space.collideMargin
     cdef cpVect dv
-    if margin != 0.0 and (a.body.m_inv == 0.0 or b.body.m_inv == 0.0
-                          or a.body.isBullet or b.body.isBullet):
+    cdef bint widened
+    margin_out[0] = margin
+    if margin == 0.0:
+        return QueryReject(a, b, margin)
+    widened = (a.body.m_inv == 0.0 or b.body.m_inv == 0.0
+               or a.body.isBullet or b.body.isBullet)
+    if not widened and not BBsWithin(a.bb, b.bb, margin):
+        return 1    # (most pairs of a falling pile: their tree boxes reach ahead)
+    if widened:
         # The soft solver's continuous collision: against static and
         # kinematic shapes (and for bullets, against anything) the
         # speculative contact also reaches as far as the pair closes in
