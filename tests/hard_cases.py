@@ -298,7 +298,10 @@ def build_zero_radius_pair(mod):
         sh.friction = 0.6
         space.add(sb, sh)
         bodies.append(sb)
-    return Scene(space, resting=bodies, rest=[0.0, 5.0, 0.0])
+    # At rest all three lie on the floor. (The tilted one's height was first
+    # written as 5, its centre with one end down; but nothing holds a rigid
+    # segment on one end with its centre 19 units to the side: it tips flat.)
+    return Scene(space, resting=bodies, rest=[0.0, 0.0, 0.0])
 
 
 def build_coincident_circles(mod):

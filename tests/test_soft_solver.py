@@ -554,7 +554,8 @@ def test_a_heavy_chain_holds_in_the_soft_solver():
 SOFT_PASSES = {
     "stack_10", "stack_20", "pyramid_20", "mass_ratio_10", "mass_ratio_100", "tunnel",
     "scale_1e-3", "far_1e6", "poly_collinear", "poly_duplicate", "poly_sliver",
-    "poly_1000_tube", "poly_256_floor", "zero_radius_floor", "coincident_circles",
+    "poly_1000_tube", "poly_256_floor", "zero_radius_floor", "zero_radius_pair",
+    "coincident_circles",
     "near_coincident_polys", "coincident_polys", "long_run", "elastic_gas", "card_house",
     "arch",
     "light_on_heavy_1000", "friction_ramp", "overlapping_start", "overfilled_box",

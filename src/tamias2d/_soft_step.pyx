@@ -61,7 +61,7 @@ from tamias2d.collision cimport (cpCollideSoft, CollisionDiagnostics, cpCollisio
     cpCollisionPutDiagnostics)
 from tamias2d._config cimport (cpCollisionID, cpHashValue, CP_MAX_CONTACTS_PER_ARBITER,
     CP_HASH_PAIR, tamias_prefetch)
-from tamias2d._structs cimport cpCollisionInfo, cpHashSet
+from tamias2d._structs cimport cpCollisionInfo, cpHashSet, cpSegmentShape, CP_SEGMENT_SHAPE
 from libc.string cimport memcpy
 
 
@@ -335,6 +335,28 @@ cdef inline bint SoftGuessHolds(const cpArbiter *arb, const cpCollisionInfo *inf
     return arb != NULL and arb.cached and (
         (arb.a == info.a and arb.b == info.b) or (arb.a == info.b and arb.b == info.a))
 
+cdef inline bint SoftFlatSegment(const cpShape *shape) noexcept nogil:
+    # A segment of radius 0 has no inside: its contact normal says which
+    # side the other shape is on, and nothing else can.
+    return (shape.klass.type == CP_SEGMENT_SHAPE
+            and (<const cpSegmentShape *>shape).r == 0.0)
+
+cdef inline void SoftKeepSide(const cpSpace *space, const cpArbiter *arb,
+                              cpCollisionInfo *info) noexcept nogil:
+    # A pair with a radius-0 segment that touched last step keeps last
+    # step's normal if the new one turned over (or is none): the shapes
+    # crossed within the step (a speculative contact lets them meet exactly,
+    # and rounding puts one a hair past the other), which the normal of
+    # where they now are would let them finish. With the old one the solver
+    # pushes them back.
+    cdef cpVect n
+    if (arb == NULL or arb.count == 0 or arb.stamp + 1 != space.stamp
+            or not (SoftFlatSegment(info.a) or SoftFlatSegment(info.b))):
+        return
+    n = arb.n if arb.a == info.a else cpv(-arb.n.x, -arb.n.y)
+    if n.x * info.n.x + n.y * info.n.y <= 0.0:
+        info.n = n
+
 cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
     # First the cheap rejection (most pairs of the broad phase, whose boxes
     # are widened for continuous collision, go no further). Also finds a
@@ -379,6 +401,7 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
                     CP_HASH_PAIR(<cpHashValue>c.info.a, <cpHashValue>c.info.b), pair)
                 if slot != NULL:
                     slot.arbiter = c.arb
+            SoftKeepSide(ctx.space, c.arb, &c.info)
             if c.arb != NULL and ctx.updateInNarrow:
                 # What cpSpaceAcceptCollision would do first, done here as
                 # no callback runs before it that could change its inputs
