@@ -125,11 +125,53 @@ static inline void soft_v2_scatter(SoftState *st, const int *idx, const int *w, 
     if (w[k]) *(double *)((char *)&st[idx[k]] + off) = v[0];
     if (w[k + 1]) *(double *)((char *)&st[idx[k + 1]] + off) = v[1];
 }
+/* A body's state into the lanes and its velocity back as whole rows, moved
+ * between rows and lanes by shuffles (a 2x2 transpose) rather than one
+ * double at a time. Only data moves: the same bits as the above. */
+#if defined(__clang__)
+#define SOFT_SHUFFLE2(a, b, i, j) __builtin_shufflevector((a), (b), i, j)
+#else
+#define SOFT_SHUFFLE2(a, b, i, j) __builtin_shuffle((a), (b), (SoftM2){i, j})
+#endif
+static inline void soft_v2_gather_state(const SoftState *st, const int *idx, int k, int full,
+                                        SoftV2 out[7]) {
+    const double *a = &st[idx[k]].vx, *b = &st[idx[k + 1]].vx;
+    SoftV2 a0, a1, b0, b1;
+    memcpy(&a0, a, 16); memcpy(&a1, a + 2, 16);
+    memcpy(&b0, b, 16); memcpy(&b1, b + 2, 16);
+    out[0] = SOFT_SHUFFLE2(a0, b0, 0, 2);   /* vx */
+    out[1] = SOFT_SHUFFLE2(a0, b0, 1, 3);   /* vy */
+    out[2] = SOFT_SHUFFLE2(a1, b1, 0, 2);   /* w */
+    out[3] = SOFT_SHUFFLE2(a1, b1, 1, 3);   /* dpx */
+    if (full) {
+        memcpy(&a0, a + 4, 16); memcpy(&a1, a + 6, 16);
+        memcpy(&b0, b + 4, 16); memcpy(&b1, b + 6, 16);
+        out[4] = SOFT_SHUFFLE2(a0, b0, 0, 2);   /* dpy */
+        out[5] = SOFT_SHUFFLE2(a0, b0, 1, 3);   /* qc */
+        out[6] = SOFT_SHUFFLE2(a1, b1, 0, 2);   /* qs */
+    }
+}
+static inline void soft_v2_scatter_velocity(SoftState *st, const int *idx, const int *w, int k,
+                                            SoftV2 vx, SoftV2 vy, SoftV2 ww) {
+    SoftV2 row;
+    if (w[k]) {
+        row = SOFT_SHUFFLE2(vx, vy, 0, 2);
+        memcpy(&st[idx[k]].vx, &row, 16);
+        st[idx[k]].w = ww[0];
+    }
+    if (w[k + 1]) {
+        row = SOFT_SHUFFLE2(vx, vy, 1, 3);
+        memcpy(&st[idx[k + 1]].vx, &row, 16);
+        st[idx[k + 1]].w = ww[1];
+    }
+}
 #define soft_v_load soft_v2_load
 #define soft_v_store soft_v2_store
 #define soft_v_splat soft_v2_splat
 #define soft_v_gather soft_v2_gather
 #define soft_v_scatter soft_v2_scatter
+#define soft_v_gather_state soft_v2_gather_state
+#define soft_v_scatter_velocity soft_v2_scatter_velocity
 #include "_soft_lanes_kernels.h"
 
 /* Four doubles with AVX2, chosen at run time where the CPU has it (a wheel
@@ -161,11 +203,50 @@ static inline void soft_v4_scatter(SoftState *st, const int *idx, const int *w, 
     for (j = 0; j < 4; j++)
         if (w[j]) *(double *)((char *)&st[idx[j]] + off) = v[j];
 }
+/* As soft_v2_gather_state, four rows at a time (4x4 transposes). */
+#define SOFT_SHUFFLE4(a, b, i, j, l, m) __builtin_shuffle((a), (b), (SoftM4){i, j, l, m})
+#define SOFT_TRANSPOSE4(r0, r1, r2, r3, o0, o1, o2, o3) do { \
+        SoftV4 t0_ = SOFT_SHUFFLE4(r0, r1, 0, 4, 2, 6), t1_ = SOFT_SHUFFLE4(r0, r1, 1, 5, 3, 7); \
+        SoftV4 t2_ = SOFT_SHUFFLE4(r2, r3, 0, 4, 2, 6), t3_ = SOFT_SHUFFLE4(r2, r3, 1, 5, 3, 7); \
+        o0 = SOFT_SHUFFLE4(t0_, t2_, 0, 1, 4, 5); o1 = SOFT_SHUFFLE4(t1_, t3_, 0, 1, 4, 5); \
+        o2 = SOFT_SHUFFLE4(t0_, t2_, 2, 3, 6, 7); o3 = SOFT_SHUFFLE4(t1_, t3_, 2, 3, 6, 7); \
+    } while (0)
+static inline SoftV4 soft_v4_row(const SoftState *st, int i, int half) {
+    SoftV4 r;
+    memcpy(&r, &st[i].vx + 4 * half, sizeof(r));
+    return r;
+}
+static inline void soft_v4_gather_state(const SoftState *st, const int *idx, int k, int full,
+                                        SoftV4 out[7]) {
+    SoftV4 r0 = soft_v4_row(st, idx[0], 0), r1 = soft_v4_row(st, idx[1], 0);
+    SoftV4 r2 = soft_v4_row(st, idx[2], 0), r3 = soft_v4_row(st, idx[3], 0);
+    SoftV4 pad;
+    (void)k;
+    SOFT_TRANSPOSE4(r0, r1, r2, r3, out[0], out[1], out[2], out[3]);   /* vx, vy, w, dpx */
+    if (full) {
+        r0 = soft_v4_row(st, idx[0], 1); r1 = soft_v4_row(st, idx[1], 1);
+        r2 = soft_v4_row(st, idx[2], 1); r3 = soft_v4_row(st, idx[3], 1);
+        SOFT_TRANSPOSE4(r0, r1, r2, r3, out[4], out[5], out[6], pad);  /* dpy, qc, qs */
+        (void)pad;
+    }
+}
+static inline void soft_v4_scatter_velocity(SoftState *st, const int *idx, const int *w, int k,
+                                            SoftV4 vx, SoftV4 vy, SoftV4 ww) {
+    SoftV4 r0, r1, r2, r3;
+    (void)k;
+    SOFT_TRANSPOSE4(vx, vy, ww, ww, r0, r1, r2, r3);   /* row j: vx, vy, w, (w) */
+    if (w[0]) memcpy(&st[idx[0]].vx, &r0, 3 * sizeof(double));
+    if (w[1]) memcpy(&st[idx[1]].vx, &r1, 3 * sizeof(double));
+    if (w[2]) memcpy(&st[idx[2]].vx, &r2, 3 * sizeof(double));
+    if (w[3]) memcpy(&st[idx[3]].vx, &r3, 3 * sizeof(double));
+}
 #define soft_v_load soft_v4_load
 #define soft_v_store soft_v4_store
 #define soft_v_splat soft_v4_splat
 #define soft_v_gather soft_v4_gather
 #define soft_v_scatter soft_v4_scatter
+#define soft_v_gather_state soft_v4_gather_state
+#define soft_v_scatter_velocity soft_v4_scatter_velocity
 #include "_soft_lanes_kernels.h"
 #pragma GCC pop_options
 #else
@@ -201,11 +282,27 @@ static inline double soft_s_gather(const SoftState *st, const int *idx, int k, s
 static inline void soft_s_scatter(SoftState *st, const int *idx, const int *w, int k, size_t off, double v) {
     if (w[k]) *(double *)((char *)&st[idx[k]] + off) = v;
 }
+static inline void soft_s_gather_state(const SoftState *st, const int *idx, int k, int full,
+                                       double out[7]) {
+    const SoftState *b = &st[idx[k]];
+    out[0] = b->vx; out[1] = b->vy; out[2] = b->w; out[3] = b->dpx;
+    if (full) {
+        out[4] = b->dpy; out[5] = b->qc; out[6] = b->qs;
+    }
+}
+static inline void soft_s_scatter_velocity(SoftState *st, const int *idx, const int *w, int k,
+                                           double vx, double vy, double ww) {
+    if (w[k]) {
+        st[idx[k]].vx = vx; st[idx[k]].vy = vy; st[idx[k]].w = ww;
+    }
+}
 #define soft_v_load soft_s_load
 #define soft_v_store soft_s_store
 #define soft_v_splat soft_s_splat
 #define soft_v_gather soft_s_gather
 #define soft_v_scatter soft_s_scatter
+#define soft_v_gather_state soft_s_gather_state
+#define soft_v_scatter_velocity soft_s_scatter_velocity
 #define V_SEL(m, a, b) ((m) ? (a) : (b))
 #define V_GT(a, b) ((a) > (b))
 #define V_GE(a, b) ((a) >= (b))

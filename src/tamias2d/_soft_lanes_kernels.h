@@ -17,8 +17,11 @@ static inline void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftState *st) {
     LOOP_LANES(k) {
         V mA = L(c->mA), iA = L(c->iA), mB = L(c->mB), iB = L(c->iB);
         V nx = L(c->nx), ny = L(c->ny);
-        V vax = G(c->ia, vx), vay = G(c->ia, vy), wa = G(c->ia, w);
-        V vbx = G(c->ib, vx), vby = G(c->ib, vy), wb = G(c->ib, w);
+        V sA[7], sB[7];
+        soft_v_gather_state(st, c->ia, k, 0, sA);
+        soft_v_gather_state(st, c->ib, k, 0, sB);
+        V vax = sA[0], vay = sA[1], wa = sA[2];
+        V vbx = sB[0], vby = sB[1], wb = sB[2];
         for (j = 0; j < c->points; j++) {
             /* P = normalImpulse n + tangentImpulse perp(n) */
             V xn = L(c->normalImpulse[j]), xt = L(c->tangentImpulse[j]);
@@ -31,8 +34,8 @@ static inline void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftState *st) {
             vby = vby + mB * py;
             wb = wb + iB * (xn * L(c->rnB[j]) + xt * L(c->rtB[j]));
         }
-        P(c->ia, c->wa, vx, vax); P(c->ia, c->wa, vy, vay); P(c->ia, c->wa, w, wa);
-        P(c->ib, c->wb, vx, vbx); P(c->ib, c->wb, vy, vby); P(c->ib, c->wb, w, wb);
+        soft_v_scatter_velocity(st, c->ia, c->wa, k, vax, vay, wa);
+        soft_v_scatter_velocity(st, c->ib, c->wb, k, vbx, vby, wb);
     }
 }
 
@@ -44,10 +47,13 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
     LOOP_LANES(k) {
         V mA = L(c->mA), iA = L(c->iA), mB = L(c->mB), iB = L(c->iB);
         V nx = L(c->nx), ny = L(c->ny);
-        V vax = G(c->ia, vx), vay = G(c->ia, vy), wa = G(c->ia, w);
-        V vbx = G(c->ib, vx), vby = G(c->ib, vy), wb = G(c->ib, w);
-        V qcA = G(c->ia, qc), qsA = G(c->ia, qs), qcB = G(c->ib, qc), qsB = G(c->ib, qs);
-        V ddx = G(c->ib, dpx) - G(c->ia, dpx), ddy = G(c->ib, dpy) - G(c->ia, dpy);
+        V sA[7], sB[7];
+        soft_v_gather_state(st, c->ia, k, 1, sA);
+        soft_v_gather_state(st, c->ib, k, 1, sB);
+        V vax = sA[0], vay = sA[1], wa = sA[2];
+        V vbx = sB[0], vby = sB[1], wb = sB[2];
+        V qcA = sA[5], qsA = sA[6], qcB = sB[5], qsB = sB[6];
+        V ddx = sB[3] - sA[3], ddy = sB[4] - sA[4];
         V bias[2], gamma[2];
         V lin, x01, x02, k11, k12, k22, a11, a22, q1, q2, det, x1, x2, y1, z2, n1, n2, d1, d2, imp;
         M ok1, ok2, ok3, ok4;
@@ -163,8 +169,8 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
                 }
             }
         }
-        P(c->ia, c->wa, vx, vax); P(c->ia, c->wa, vy, vay); P(c->ia, c->wa, w, wa);
-        P(c->ib, c->wb, vx, vbx); P(c->ib, c->wb, vy, vby); P(c->ib, c->wb, w, wb);
+        soft_v_scatter_velocity(st, c->ia, c->wa, k, vax, vay, wa);
+        soft_v_scatter_velocity(st, c->ib, c->wb, k, vbx, vby, wb);
     }
 }
 
@@ -184,3 +190,5 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
 #undef soft_v_splat
 #undef soft_v_gather
 #undef soft_v_scatter
+#undef soft_v_gather_state
+#undef soft_v_scatter_velocity
