@@ -133,9 +133,10 @@ cdef enum:
     SOFT_SCRATCH_CANDIDATES   # the narrow phase of each pair (SoftCollide)
     SOFT_SCRATCH_PAIRS        # the broad phase's pairs, kept between steps
     SOFT_SCRATCH_TOUCHING     # each pair's narrow phase found contacts
+    SOFT_SCRATCH_KEYS         # what the colouring reads of each contact (SoftColorKey)
     SOFT_SCRATCH_COUNT
 
-# (cpSoftScratch holds 12 buffers.)
+# (cpSoftScratch holds 16 buffers.)
 
 cdef void *_reserve(cpSpace *space, int which, int need, size_t size) noexcept nogil:
     # Room for `need` elements of `size` bytes in scratch buffer `which`, or
@@ -175,6 +176,14 @@ cdef struct SoftCandidate:
     cpCollisionInfo info
     cpContact contacts[CP_MAX_CONTACTS_PER_ARBITER]
 
+# What the colouring needs of a contact, packed (it reads them in order,
+# one after the other): its movable bodies' slots (0: immovable) and its
+# lane kind (points - 1; -1: solved one by one, in the overflow).
+cdef struct SoftColorKey:
+    int a
+    int b
+    int kind
+
 cdef struct SoftContext:
     cpSpace *space
     SoftBody *bodies
@@ -189,6 +198,7 @@ cdef struct SoftContext:
     int *overflow             # SoftContact indices solved one by one
     volatile long shapesUpdated   # by SoftUpdateShapes
     int *laneSlots            # contact i goes to lane laneSlots[i] // SOFT_LANES (-1: overflow)
+    SoftColorKey *colorKeys   # by SoftPrepareContactRange, for SoftColorContacts
     int overflowCount
     SoftPair *pairs           # this step's pairs from the broad phase (or the last walk's)
     int pairCount
@@ -745,7 +755,9 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     ctx.contacts = <SoftContact *>_reserve(space, SOFT_SCRATCH_CONTACTS, arbiters.num,
                                            sizeof(SoftContact))
     ctx.contactSource = <int *>_reserve(space, SOFT_SCRATCH_SOURCE, arbiters.num, sizeof(int))
-    if ctx.contacts == NULL or ctx.contactSource == NULL:
+    ctx.colorKeys = <SoftColorKey *>_reserve(space, SOFT_SCRATCH_KEYS, arbiters.num,
+                                             sizeof(SoftColorKey))
+    if ctx.contacts == NULL or ctx.contactSource == NULL or ctx.colorKeys == NULL:
         return 0
     ctx.warmCoef = ctx.h / prev_dt if prev_dt != 0.0 else 0.0
     ctx.loadCoef = 1.0 / prev_dt if prev_dt != 0.0 else 0.0
@@ -765,6 +777,7 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
 
 cdef void SoftPrepareContactRange(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef cpArray *arbiters = ctx.space.arbiters
+    cdef SoftColorKey *key
     cdef int i, j, n
     cdef cpArbiter *arb
     cdef cpContact *con
@@ -866,6 +879,11 @@ cdef void SoftPrepareContactRange(SoftContext *ctx, int begin, int end) noexcept
             con.bounce = sp.relativeVelocity * arb.e
         if sc.count == 2:
             SoftPrepareBlock(sc, a, b)
+        key = &ctx.colorKeys[n]
+        key.a = sc.ia if SoftMovable(ctx, sc.ia) else 0
+        key.b = sc.ib if SoftMovable(ctx, sc.ib) else 0
+        key.kind = (sc.count - 1 if sc.block or (sc.count == 1 and sc.p[0].normalMass > 0.0)
+                    else -1)
 
 # Above this condition number the two normal rows are nearly dependent (the
 # points almost coincide) and are solved one after the other instead.
@@ -909,7 +927,7 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
     cdef uint64_t *bits
     cdef uint64_t *row
     cdef int *color
-    cdef SoftContact *sc
+    cdef SoftColorKey *key
     cdef SoftLanes *ln
     cdef int counts[2][SOFT_GRAPH_COLORS]    # [points - 1][colour]
     cdef int fill[2][SOFT_GRAPH_COLORS]
@@ -927,11 +945,11 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
             fill[kind][c] = 0
     ctx.overflowCount = 0
     for i in range(n):
-        sc = &ctx.contacts[i]
+        key = &ctx.colorKeys[i]
         col = SOFT_GRAPH_COLORS
-        if sc.block or (sc.count == 1 and sc.p[0].normalMass > 0.0):
-            a = sc.ia if SoftMovable(ctx, sc.ia) else 0
-            b = sc.ib if SoftMovable(ctx, sc.ib) else 0
+        if key.kind >= 0:
+            a = key.a
+            b = key.b
             # As Box2D: a contact with an immovable body never takes colour
             # 0, so the first colour is solved between movable bodies only.
             for c in range(0 if (a != 0 and b != 0) else 1, SOFT_GRAPH_COLORS):
@@ -951,7 +969,7 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
             ctx.overflow[ctx.overflowCount] = i
             ctx.overflowCount += 1
         else:
-            counts[sc.count - 1][col] += 1
+            counts[key.kind][col] += 1
     total = 0
     for c in range(SOFT_GRAPH_COLORS):
         ctx.colorLanes[c] = total
@@ -969,7 +987,7 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
         if c == SOFT_GRAPH_COLORS:
             color[i] = -1
             continue
-        kind = ctx.contacts[i].count - 1
+        kind = ctx.colorKeys[i].kind
         k = start[kind][c] * SOFT_LANES + fill[kind][c]
         ctx.lanes[k // SOFT_LANES].points = kind + 1
         color[i] = k
