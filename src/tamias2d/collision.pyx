@@ -237,8 +237,15 @@ cdef inline Edge EdgeNew(cpVect pa, cpHashValue ha, cpVect pb, cpHashValue hb, c
     return edge
 
 cdef Edge SupportEdgeForPoly(const cpPolyShape *poly, const cpVect n) noexcept nogil:
-    cdef int count = poly.count
-    cdef int i1 = PolySupportPointIndex(poly.count, poly.planes, n)
+    if poly.count == 4:
+        # A quadrilateral (a box): the same with the count known, which the
+        # compiler unrolls (and its modulo becomes a mask).
+        return SupportEdgeForPolyOf(poly, 4, n)
+    return SupportEdgeForPolyOf(poly, poly.count, n)
+
+cdef inline Edge SupportEdgeForPolyOf(const cpPolyShape *poly, const int count,
+                                      const cpVect n) noexcept nogil:
+    cdef int i1 = PolySupportPointIndex(count, poly.planes, n)
     cdef int i0 = (i1 - 1 + count) % count
     cdef int i2 = (i1 + 1) % count
     cdef const cpSplittingPlane *planes = poly.planes
@@ -644,8 +651,9 @@ cdef void CircleToPoly(const cpShape *a, const cpShape *b, cpCollisionInfo *info
 cdef enum:
     SEPARATING_AXES_MAX_WORK = 64
 
-cdef inline cpFloat PolyFaceSeparation(const cpPolyShape *ref, const cpPolyShape *inc,
-                                       cpFloat stop, int *face) noexcept nogil:
+cdef inline cpFloat PolyFaceSeparationOf(const cpPolyShape *ref, const cpPolyShape *inc,
+                                         int refCount, int incCount, cpFloat stop,
+                                         int *face) noexcept nogil:
     # The face of `ref` along whose normal `inc` reaches least far in, and how
     # far out that is (negative: overlap). Stops at the first beyond `stop`.
     cdef cpFloat best = -INFINITY
@@ -653,10 +661,10 @@ cdef inline cpFloat PolyFaceSeparation(const cpPolyShape *ref, const cpPolyShape
     cdef cpVect n
     cdef int i, j
     face[0] = 0
-    for i in range(ref.count):
+    for i in range(refCount):
         n = ref.planes[i].n
         reach = INFINITY
-        for j in range(inc.count):
+        for j in range(incCount):
             x = cpvdot(n, inc.planes[j].v0)
             if x < reach:
                 reach = x
@@ -667,6 +675,14 @@ cdef inline cpFloat PolyFaceSeparation(const cpPolyShape *ref, const cpPolyShape
             if sep > stop:
                 break
     return best
+
+cdef inline cpFloat PolyFaceSeparation(const cpPolyShape *ref, const cpPolyShape *inc,
+                                       cpFloat stop, int *face) noexcept nogil:
+    if ref.count == 4 and inc.count == 4:
+        # Two quadrilaterals (boxes, the commonest pair): the same loops with
+        # their lengths known, which the compiler unrolls.
+        return PolyFaceSeparationOf(ref, inc, 4, 4, stop, face)
+    return PolyFaceSeparationOf(ref, inc, ref.count, inc.count, stop, face)
 
 cdef void PolyToPolySeparatingAxes(const cpShape *a, const cpShape *b,
                                    cpCollisionInfo *info) noexcept nogil:
