@@ -317,3 +317,42 @@ def test_values_outside_the_step():
                                             arb.is_first_contact, arb.restitution)))
     assert got[0][0] == pytest.approx((3.3936651583, 4.3438914027))
     assert got[0][2] is True
+
+
+@pytest.mark.parametrize("solver", ["chipmunk", "soft"])
+@pytest.mark.parametrize("change", ["handler", "wildcard", "collision_type"])
+def test_a_handler_added_or_a_type_changed_mid_contact_takes_effect(solver, change):
+    # An arbiter keeps the handlers it looked up while the types and the
+    # space's handlers stay the same; a handler added while the pair is in
+    # contact, or a new collision type, must be found at the next step (and
+    # pymunk's solver calls it there too).
+    results = {}
+    for mod in (tamias2d, pymunk):
+        if mod is pymunk and solver == "soft":
+            continue
+        s = mod.Space()
+        s.gravity = 0, -100
+        if mod is tamias2d:
+            s.solver = solver
+        ground = mod.Segment(s.static_body, (-100, 0), (100, 0), 1)
+        ground.collision_type = 1
+        body = mod.Body(1, 100)
+        body.position = 0, 10.5
+        ball = mod.Circle(body, 10)
+        ball.collision_type = 2
+        s.add(ground, body, ball)
+        calls = []
+        for i in range(20):
+            if i == 10:
+                if change == "handler":
+                    s.on_collision(1, 2, pre_solve=lambda arb, space, data: calls.append(i))
+                elif change == "wildcard":
+                    s.on_collision(2, None, pre_solve=lambda arb, space, data: calls.append(i))
+                else:
+                    s.on_collision(1, 3, pre_solve=lambda arb, space, data: calls.append(i))
+                    ball.collision_type = 3
+            s.step(1 / 60)
+        results[mod.__name__] = calls
+    assert results["tamias2d"] == list(range(10, 20))
+    if "pymunk" in results:
+        assert results["pymunk"] == results["tamias2d"]

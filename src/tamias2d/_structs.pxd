@@ -260,6 +260,12 @@ cdef struct cpArbiter:
     cpBool processCollision
     # In space.cachedArbiters (the soft solver checks its guesses against it).
     cpBool cached
+    # Not Munk2D's: the collision types and space.handlerVersion the four
+    # handlers were looked up for (0: not yet), so that an update finds them
+    # again only when one of those changed.
+    unsigned int handlerVersion
+    cpCollisionType handlerTypeA
+    cpCollisionType handlerTypeB
 
 # -- constraints (declared for the body lists; joints are not ported yet) -------
 ctypedef void (*cpConstraintPreStepImpl)(cpConstraint *constraint, cpFloat dt) noexcept nogil
@@ -394,6 +400,9 @@ cdef struct cpSpace:
     cpTimestamp collisionPersistence
     cpDataPointer userData      # borrowed pointer to the Python Space
     cpTimestamp stamp
+    # Not Munk2D's: +1 whenever a collision handler is added (from 1), see
+    # cpArbiter.handlerVersion.
+    unsigned int handlerVersion
     # Not Munk2D's: how many cached arbiters have this step's stamp (see
     # cpSpaceStampArbiter), so that the cache filter can tell it has no work.
     int arbitersStamped

@@ -200,6 +200,7 @@ cdef cpArbiter *cpArbiterInit(cpArbiter *arb, cpShape *a, cpShape *b) noexcept n
     arb.processCollision = 1
     arb.cached = 0
     arb.data = NULL
+    arb.handlerVersion = 0
     return arb
 
 cdef inline cpCollisionHandler *cpSpaceLookupHandler(cpSpace *space, cpCollisionType a,
@@ -260,13 +261,21 @@ cdef void cpArbiterUpdate(cpArbiter *arb, cpCollisionInfo *info, cpSpace *space)
 
     typeA = info.a.type
     typeB = info.b.type
-    arb.handlerAB = cpSpaceLookupHandler(space, typeA, typeB)
-    arb.handlerA = cpSpaceLookupHandler(space, typeA, CP_WILDCARD_COLLISION_TYPE)
-    if typeA != typeB:
-        arb.handlerBA = cpSpaceLookupHandler(space, typeB, typeA)
-    else:
-        arb.handlerBA = &_do_nothing_handler
-    arb.handlerB = cpSpaceLookupHandler(space, typeB, CP_WILDCARD_COLLISION_TYPE)
+    if (arb.handlerVersion != space.handlerVersion or arb.handlerTypeA != typeA
+            or arb.handlerTypeB != typeB):
+        # (Else the same four lookups as last time: no handler was added
+        # since and the types are the same.)
+        arb.handlerAB = cpSpaceLookupHandler(space, typeA, typeB)
+        arb.handlerA = cpSpaceLookupHandler(space, typeA, CP_WILDCARD_COLLISION_TYPE)
+        if typeA != typeB:
+            arb.handlerBA = cpSpaceLookupHandler(space, typeB, typeA)
+        else:
+            arb.handlerBA = &_do_nothing_handler
+        arb.handlerB = cpSpaceLookupHandler(space, typeB, CP_WILDCARD_COLLISION_TYPE)
+        arb.handlerVersion = space.handlerVersion
+        arb.handlerTypeA = typeA
+        arb.handlerTypeB = typeB
+    # (Every time: the handler calls turn `swapped` over and back.)
     arb.swapped = (typeA != arb.handlerAB.typeA
                    and arb.handlerAB.typeA != CP_WILDCARD_COLLISION_TYPE)
 

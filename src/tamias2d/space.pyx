@@ -155,6 +155,7 @@ cdef cpSpace *cpSpaceInit(cpSpace *space) noexcept nogil:
     space.collisionPersistence = 3
     space.locked = 0
     space.stamp = 0
+    space.handlerVersion = 1
     space.curr_dt = 0.0
     space.userData = NULL
     # Not in Munk2D: the second solver's settings (off: solver "chipmunk").
@@ -294,6 +295,7 @@ cdef cpCollisionHandler *cpSpaceAddCollisionHandler(cpSpace *space, cpCollisionT
     handler.postSolveFunc = cpCollisionDoNothing
     handler.separateFunc = cpCollisionDoNothing
     handler.userData = NULL
+    space.handlerVersion += 1   # an arbiter may now have another handler
     return <cpCollisionHandler *>cpHashSetInsert(space.collisionHandlers, hash, &handler,
                                                  handlerSetTrans, NULL)
 
@@ -307,6 +309,7 @@ cdef cpCollisionHandler *cpSpaceAddWildcardHandler(cpSpace *space, cpCollisionTy
     handler.postSolveFunc = cpCollisionDoNothing
     handler.separateFunc = cpCollisionDoNothing
     handler.userData = NULL
+    space.handlerVersion += 1   # an arbiter may now have another handler
     return <cpCollisionHandler *>cpHashSetInsert(space.collisionHandlers, hash, &handler,
                                                  handlerSetTrans, NULL)
 
