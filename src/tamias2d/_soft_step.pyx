@@ -38,6 +38,7 @@ from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, 
     CP_BODY_TYPE_KINEMATIC, CP_ARBITER_STATE_FIRST_COLLISION)
 from tamias2d._containers cimport cprealloc, cpfree, cpHashSetFind
 from tamias2d._threads cimport (tamias_take_next, tamias_load, tamias_store, tamias_add,
+    tamias_add_int,
     tamias_exchange, tamias_cpu_relax, tamias_yield, tamias_now_ns)
 from cpython.pythread cimport (PyThread_type_lock, PyThread_allocate_lock,
     PyThread_acquire_lock, PyThread_release_lock, WAIT_LOCK)
@@ -208,6 +209,9 @@ cdef struct SoftContext:
     bint updateInNarrow       # no begin or pre-solve callbacks: arbiters updated in parallel
     bint keepingPairs         # the broad phase's walk is being kept (SoftCollectPair)
     volatile long elastic     # a contact has restitution (set by SoftPrepareContactRange)
+    volatile long customVelocity  # a body has its own velocity_func (SoftGatherRange)
+    volatile long customPosition  # ... position_func
+    volatile long emptyArbiter    # an arbiter has no contacts (SoftCountRange)
     bint threaded             # stages may run on the pool (SoftRun)
     bint serialVelocities     # a body has its own velocity_func (Python: one thread)
     bint serialPositions      # a body has its own position_func
@@ -520,13 +524,11 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
 # -- gather ----------------------------------------------------------------------------
 
 cdef bint SoftGatherBodies(SoftContext *ctx) noexcept nogil:
+    # The awake bodies into slots 1.. (on the pool when threaded); slot 0 is
+    # the immovable body every static, sleeping or removed one maps to.
     cdef cpSpace *space = ctx.space
-    cdef cpArray *arr = space.dynamicBodies
-    cdef int n = arr.num + 1
-    cdef int i
+    cdef int n = space.dynamicBodies.num + 1
     cdef SoftBody *sb
-    cdef SoftState *st
-    cdef cpBody *body
     ctx.bodies = <SoftBody *>_reserve(space, SOFT_SCRATCH_BODIES, n, sizeof(SoftBody))
     ctx.states = <SoftState *>_reserve(space, SOFT_SCRATCH_STATES, n, sizeof(SoftState))
     if ctx.bodies == NULL or ctx.states == NULL:
@@ -539,7 +541,20 @@ cdef bint SoftGatherBodies(SoftContext *ctx) noexcept nogil:
     sb.body = NULL
     sb.flags = 0
     sb.contacts = 0
-    for i in range(1, n):
+    tamias_store(&ctx.customVelocity, 0)
+    tamias_store(&ctx.customPosition, 0)
+    SoftRun(ctx, SOFT_TASK_GATHER, 1, n, 0)
+    ctx.serialVelocities = tamias_load(&ctx.customVelocity) != 0
+    ctx.serialPositions = tamias_load(&ctx.customPosition) != 0
+    return 1
+
+cdef void SoftGatherRange(SoftContext *ctx, int begin, int end) noexcept nogil:
+    cdef cpArray *arr = ctx.space.dynamicBodies
+    cdef int i
+    cdef SoftBody *sb
+    cdef SoftState *st
+    cdef cpBody *body
+    for i in range(begin, end):
         body = <cpBody *>arr.arr[i - 1]
         body.solverIndex = i
         st = &ctx.states[i]
@@ -558,14 +573,13 @@ cdef bint SoftGatherBodies(SoftContext *ctx) noexcept nogil:
         if body.velocity_func == cpBodyUpdateVelocity:
             sb.flags |= SOFT_BODY_DEFAULT_VELOCITY
         else:
-            ctx.serialVelocities = 1
+            tamias_store(&ctx.customVelocity, 1)
         if body.position_func == cpBodyUpdatePosition:
             sb.flags |= SOFT_BODY_DEFAULT_POSITION
         else:
-            ctx.serialPositions = 1
+            tamias_store(&ctx.customPosition, 1)
         if cpBodyGetType(body) == CP_BODY_TYPE_KINEMATIC:
             sb.flags |= SOFT_BODY_KINEMATIC
-    return 1
 
 
 # -- joints ------------------------------------------------------------------------------
@@ -763,17 +777,52 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     ctx.loadCoef = 1.0 / prev_dt if prev_dt != 0.0 else 0.0
     # Each body's number of contacts: a contact is stiffened for its load
     # only where both of its bodies have at most two (SoftMaxStiffening).
-    for i in range(arbiters.num):
-        arb = <cpArbiter *>arbiters.arr[i]
-        if arb.count <= 0 or arb.contacts == NULL:
-            continue
-        ctx.contactSource[n] = i
-        n += 1
-        ctx.bodies[SoftIndex(arb.body_a, ctx.bodies, ctx.bodyCount)].contacts += 1
-        ctx.bodies[SoftIndex(arb.body_b, ctx.bodies, ctx.bodyCount)].contacts += 1
+    # On the pool; an arbiter without contacts (only after a failed
+    # allocation) makes it all be done again here, skipping those.
+    tamias_store(&ctx.emptyArbiter, 0)
+    SoftRun(ctx, SOFT_TASK_COUNT, 0, arbiters.num, ctx.threaded)
+    if tamias_load(&ctx.emptyArbiter):
+        for i in range(1, ctx.bodyCount):
+            ctx.bodies[i].contacts = 0
+        for i in range(arbiters.num):
+            arb = <cpArbiter *>arbiters.arr[i]
+            if arb.count <= 0 or arb.contacts == NULL:
+                continue
+            ctx.contactSource[n] = i
+            n += 1
+            SoftCountContact(ctx, arb, 0)
+    else:
+        n = arbiters.num
     ctx.contactCount = n
     SoftRun(ctx, SOFT_TASK_PREPARE, 0, n, 0)
     return 1
+
+cdef inline void SoftCountContact(SoftContext *ctx, cpArbiter *arb, bint atomic) noexcept nogil:
+    # (Slot 0's count is never read.)
+    cdef int ia = SoftIndex(arb.body_a, ctx.bodies, ctx.bodyCount)
+    cdef int ib = SoftIndex(arb.body_b, ctx.bodies, ctx.bodyCount)
+    if atomic:
+        if ia != 0:
+            tamias_add_int(&ctx.bodies[ia].contacts, 1)
+        if ib != 0:
+            tamias_add_int(&ctx.bodies[ib].contacts, 1)
+    else:
+        if ia != 0:
+            ctx.bodies[ia].contacts += 1
+        if ib != 0:
+            ctx.bodies[ib].contacts += 1
+
+cdef void SoftCountRange(SoftContext *ctx, int begin, int end, bint atomic) noexcept nogil:
+    cdef cpArray *arbiters = ctx.space.arbiters
+    cdef cpArbiter *arb
+    cdef int i
+    for i in range(begin, end):
+        arb = <cpArbiter *>arbiters.arr[i]
+        if arb.count <= 0 or arb.contacts == NULL:
+            tamias_store(&ctx.emptyArbiter, 1)
+            continue
+        ctx.contactSource[i] = i
+        SoftCountContact(ctx, arb, atomic)
 
 cdef void SoftPrepareContactRange(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef cpArray *arbiters = ctx.space.arbiters
@@ -1563,6 +1612,8 @@ cdef enum:
     SOFT_TASK_FINISH_BODIES
     SOFT_TASK_PACK
     SOFT_TASK_UPDATE_SHAPES
+    SOFT_TASK_GATHER
+    SOFT_TASK_COUNT
 
 cdef enum:
     SOFT_CHUNK_LANES = 32         # lanes of contacts per chunk
@@ -1623,6 +1674,10 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
         SoftPackLanes(ctx, begin, end)
     elif task == SOFT_TASK_UPDATE_SHAPES:
         SoftUpdateShapes(ctx, begin, end)
+    elif task == SOFT_TASK_GATHER:
+        SoftGatherRange(ctx, begin, end)
+    elif task == SOFT_TASK_COUNT:
+        SoftCountRange(ctx, begin, end, flag)
 
 cdef void SoftTakeChunks(bint caller) noexcept nogil:
     # The caller takes chunks from the front, the worker from the back: in
@@ -1650,9 +1705,10 @@ cdef void SoftRun(SoftContext *ctx, int task, int begin, int end, bint flag) noe
     # and the stage is big enough to share, else here.
     cdef int chunk = SOFT_CHUNK_LANES
     if (task <= SOFT_TASK_INTEGRATE_POSITIONS or task == SOFT_TASK_FINISH_BODIES
-            or task == SOFT_TASK_UPDATE_SHAPES):
+            or task == SOFT_TASK_UPDATE_SHAPES or task == SOFT_TASK_GATHER):
         chunk = SOFT_CHUNK_BODIES
-    elif task == SOFT_TASK_PREPARE or task == SOFT_TASK_STORE or task == SOFT_TASK_PACK:
+    elif (task == SOFT_TASK_PREPARE or task == SOFT_TASK_STORE or task == SOFT_TASK_PACK
+            or task == SOFT_TASK_COUNT):
         chunk = SOFT_CHUNK_CONTACTS
     elif task == SOFT_TASK_NARROW:
         chunk = SOFT_CHUNK_PAIRS
