@@ -1339,33 +1339,16 @@ cdef void SoftRelax(SoftContext *ctx, bint last) noexcept nogil:
             sc.p[j].totalNormal += sc.p[j].normalImpulse
             sc.p[j].totalTangent += sc.p[j].tangentImpulse
 
-cdef void SoftUnpackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
+cdef void SoftUnpackLanes(SoftContext *ctx, int begin, int end, bint store) noexcept nogil:
     # The lanes' impulses back into their SoftContacts (restitution and the
-    # arbiters read them there).
+    # arbiters read them there); with `store`, for a step without
+    # restitution (nothing else reads the SoftContacts' impulses), the step's
+    # totals straight into the arbiters' contacts instead (SoftStoreImpulses
+    # in the same pass).
     cdef int i, j, k
     cdef SoftLanes *ln
     cdef SoftContact *sc
     cdef SoftPoint *sp
-    for i in range(begin, end):
-        ln = &ctx.lanes[i]
-        for k in range(SOFT_LANES):
-            if ln.src[k] < 0:
-                continue
-            sc = &ctx.contacts[ln.src[k]]
-            for j in range(sc.count):
-                sp = &sc.p[j]
-                sp.normalImpulse = ln.normalImpulse[j][k]
-                sp.tangentImpulse = ln.tangentImpulse[j][k]
-                sp.maxNormalImpulse = ln.maxNormalImpulse[j][k]
-                sp.totalNormal = ln.totalNormal[j][k]
-                sp.totalTangent = ln.totalTangent[j][k]
-
-cdef void SoftStoreLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
-    # SoftUnpackLanes and SoftStoreImpulses in one, for a step without
-    # restitution (nothing else reads the SoftContacts' impulses).
-    cdef int i, j, k
-    cdef SoftLanes *ln
-    cdef SoftContact *sc
     cdef cpContact *con
     for i in range(begin, end):
         ln = &ctx.lanes[i]
@@ -1374,9 +1357,17 @@ cdef void SoftStoreLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
                 continue
             sc = &ctx.contacts[ln.src[k]]
             for j in range(sc.count):
-                con = &sc.arb.contacts[j]
-                con.jnAcc = ln.totalNormal[j][k]
-                con.jtAcc = ln.totalTangent[j][k]
+                if store:
+                    con = &sc.arb.contacts[j]
+                    con.jnAcc = ln.totalNormal[j][k]
+                    con.jtAcc = ln.totalTangent[j][k]
+                    continue
+                sp = &sc.p[j]
+                sp.normalImpulse = ln.normalImpulse[j][k]
+                sp.tangentImpulse = ln.tangentImpulse[j][k]
+                sp.maxNormalImpulse = ln.maxNormalImpulse[j][k]
+                sp.totalNormal = ln.totalNormal[j][k]
+                sp.totalTangent = ln.totalTangent[j][k]
 
 cdef void SoftStoreOverflow(SoftContext *ctx) noexcept nogil:
     # The contacts solved one by one hold their impulses themselves.
@@ -1608,7 +1599,6 @@ cdef enum:
     SOFT_TASK_NARROW
     SOFT_TASK_UNPACK
     SOFT_TASK_STORE
-    SOFT_TASK_STORE_LANES
     SOFT_TASK_FINISH_BODIES
     SOFT_TASK_PACK
     SOFT_TASK_UPDATE_SHAPES
@@ -1663,11 +1653,9 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
     elif task == SOFT_TASK_NARROW:
         SoftNarrowPhase(ctx, begin, end)
     elif task == SOFT_TASK_UNPACK:
-        SoftUnpackLanes(ctx, begin, end)
+        SoftUnpackLanes(ctx, begin, end, flag)
     elif task == SOFT_TASK_STORE:
         SoftStoreImpulses(ctx, begin, end)
-    elif task == SOFT_TASK_STORE_LANES:
-        SoftStoreLanes(ctx, begin, end)
     elif task == SOFT_TASK_FINISH_BODIES:
         SoftFinishBodies(ctx, begin, end)
     elif task == SOFT_TASK_PACK:
@@ -1906,7 +1894,7 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
             SoftApplyRestitution(&ctx)
             SoftRun(&ctx, SOFT_TASK_STORE, 0, ctx.contactCount, 0)
         else:
-            SoftRun(&ctx, SOFT_TASK_STORE_LANES, 0, ctx.colorLanes[SOFT_GRAPH_COLORS], 0)
+            SoftRun(&ctx, SOFT_TASK_UNPACK, 0, ctx.colorLanes[SOFT_GRAPH_COLORS], 1)
             SoftStoreOverflow(&ctx)
         SoftRun(&ctx, SOFT_TASK_FINISH_BODIES, 1, ctx.bodyCount, 0)
         SoftFinishJoints(&ctx)
