@@ -1018,6 +1018,60 @@ def test_skipping_the_idle_arbiter_filter_changes_nothing(scene, solver):
     assert repr(bodies) == repr(bodies_filtered)
 
 
+@pytest.mark.parametrize("scene", ["pyramid", "add_remove", "type_changes", "static_changes",
+                                   "rain_persistence_1", "rain_persistence_0"])
+def test_arbiters_left_threaded_change_nothing(scene):
+    # Where nothing can look at the bodies' arbiter lists during the
+    # collision, a soft step leaves last step's arbiters threaded and
+    # re-threads only if this step's differ: the lists (each body's arbiters
+    # in order, and which bodies they join) and the bodies must be what
+    # Munk2D's unthreading of every arbiter at every step gives.
+    import scenes
+    from tamias2d import _soft_step
+    builds = {"static_changes": _static_changes,
+              "rain_persistence_1": lambda: _short_memory_rain(1),
+              "rain_persistence_0": lambda: _short_memory_rain(0)}
+    build = builds.get(scene) or (lambda: getattr(scenes, scene)(tamias2d))
+
+    def run():
+        s = build()
+        s.solver = "soft"
+        labels = {}
+
+        def label(shape):
+            if shape not in labels:
+                for other in s.shapes:
+                    labels.setdefault(other, len(labels))
+            return labels.get(shape, -1)
+        hook = getattr(s, "scene_hook", None)
+        seen = []
+        for i in range(240):
+            if hook is not None:
+                hook(i)
+            s.step(DT)
+            if i % 20 == 19:
+                for b in s.bodies:
+                    arbs = []
+                    b.each_arbiter(lambda arb: arbs.append(tuple(label(x) for x in arb.shapes)))
+                    seen.append((i, arbs))
+        return seen, [(tuple(b.position), b.angle, tuple(b.velocity)) for b in s.bodies]
+
+    assert _soft_step._keep_arbiter_threads()
+    try:
+        _soft_step._keep_arbiter_threads(False)
+        kept = _soft_step._kept_threads_count()
+        lists_munk2d, bodies_munk2d = run()
+        assert _soft_step._kept_threads_count() == kept
+    finally:
+        _soft_step._keep_arbiter_threads(True)
+    kept = _soft_step._kept_threads_count()
+    lists, bodies = run()
+    if scene in ("pyramid", "static_changes"):
+        assert _soft_step._kept_threads_count() > kept, "no step kept its threads: nothing tested"
+    assert lists == lists_munk2d
+    assert repr(bodies) == repr(bodies_munk2d)
+
+
 @pytest.mark.parametrize("scene", ["pyramid", "mixed", "rain"])
 def test_arbiters_updated_in_the_narrow_phase_give_the_same_bits(scene):
     # Without begin or pre-solve callbacks the soft solver updates the cached

@@ -31,11 +31,11 @@ colouring and SIMD lanes can partition these arrays later.
 """
 from libc.math cimport INFINITY, pow, sqrt, cos, sin, fabs, fmin, fmax
 from libc.stdint cimport uint64_t
-from libc.string cimport memset
+from libc.string cimport memset, memcmp
 from tamias2d._config cimport cpFloat, cpBool
 from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, cpArray, cpConstraint,
     cpSoftSettings, cpSoftScratch, TAMIAS_SOLVER_CHIPMUNK, TAMIAS_SOLVER_SOFT,
-    CP_BODY_TYPE_KINEMATIC, CP_ARBITER_STATE_FIRST_COLLISION)
+    CP_BODY_TYPE_KINEMATIC, CP_ARBITER_STATE_FIRST_COLLISION, CP_ARBITER_STATE_NORMAL)
 from tamias2d._containers cimport cprealloc, cpfree, cpHashSetFind
 from tamias2d._threads cimport (tamias_take_next, tamias_load, tamias_store, tamias_add,
     tamias_add_int,
@@ -53,7 +53,7 @@ from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, StageResetArbiter
     cpSpaceRejectPair, cpSpaceAcceptCollision, cpSpacePushFreshContactBuffer,
     cpContactBufferGetArray, cpSpacePushContacts, cpSpaceCollideShapes, cpShapeUpdateFunc,
     cpSpaceHasHandlers)
-from tamias2d.arbiter cimport cpArbiterUpdate
+from tamias2d.arbiter cimport cpArbiterUpdate, cpArbiterUnthread
 from tamias2d._spatialindex cimport (cpSpatialIndexEach, cpSpatialIndexReindexQuery,
     cpSpatialIndexCount)
 from tamias2d.shape cimport cpShapeCacheBB
@@ -135,6 +135,7 @@ cdef enum:
     SOFT_SCRATCH_PAIRS        # the broad phase's pairs, kept between steps
     SOFT_SCRATCH_TOUCHING     # each pair's narrow phase found contacts
     SOFT_SCRATCH_KEYS         # what the colouring reads of each contact (SoftColorKey)
+    SOFT_SCRATCH_THREADED     # last step's arbiters, still threaded (SoftResetArbiters)
     SOFT_SCRATCH_COUNT
 
 # (cpSoftScratch holds 16 buffers.)
@@ -212,6 +213,7 @@ cdef struct SoftContext:
     volatile long customVelocity  # a body has its own velocity_func (SoftGatherRange)
     volatile long customPosition  # ... position_func
     volatile long emptyArbiter    # an arbiter has no contacts (SoftCountRange)
+    int threadedCount         # last step's arbiters left threaded (-1: unthreaded as Munk2D)
     bint threaded             # stages may run on the pool (SoftRun)
     bint serialVelocities     # a body has its own velocity_func (Python: one thread)
     bint serialPositions      # a body has its own position_func
@@ -340,6 +342,9 @@ cdef bint _use_guesses = 1
 cdef bint _keep_pairs = 1
 # Steps whose walk was kept, in all spaces (for tests: that it happens).
 cdef volatile long _kept_walks = 0
+# The same for the bodies' arbiter lists (SoftResetArbiters).
+cdef bint _keep_threads = 1
+cdef volatile long _kept_threads = 0
 
 cdef inline bint SoftGuessHolds(const cpArbiter *arb, const cpCollisionInfo *info) noexcept nogil:
     # The guess is the pair's cached arbiter: in the cache and of these two
@@ -519,6 +524,54 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
                                      c.updated)
         if ctx.pairs[i].slot != NULL and c.arb == NULL:
             ctx.pairs[i].slot.arbiter = arb    # new this step: next step's guess
+
+
+# -- the bodies' arbiter lists -----------------------------------------------------------
+# Munk2D unthreads every arbiter of the last step from its bodies' lists
+# before the collision and threads this step's on again after it (head
+# insertion in array order): two passes over every arbiter and its bodies.
+# In a pile at rest the step's arbiters are the last step's, in the same
+# order, and the lists come out as they were; so, where nothing can look at
+# the lists in between, they stay threaded and the two passes are made only
+# when the arbiters turn out to differ. Nothing can look when sleeping is off
+# (no waking, which walks them), no begin or pre-solve handler runs, and the
+# collision persistence is above 0 (at 0 last step's arbiters went back to
+# the pool, and may be another pair's by now). cpArbiterUpdate swaps an
+# arbiter's threads with its bodies, so the lists stay consistent whatever
+# order its pair comes in.
+
+cdef void SoftResetArbiters(SoftContext *ctx) noexcept nogil:
+    cdef cpSpace *space = ctx.space
+    cdef cpArray *arbiters = space.arbiters
+    cdef void **saved
+    cdef int i
+    ctx.threadedCount = -1
+    if (_keep_threads and space.sleepTimeThreshold == INFINITY
+            and space.collisionPersistence > 0 and not cpSpaceHasHandlers(space, 1, 1, 0)):
+        saved = <void **>_reserve(space, SOFT_SCRATCH_THREADED, arbiters.num, sizeof(void *))
+        if saved != NULL:
+            for i in range(arbiters.num):
+                (<cpArbiter *>arbiters.arr[i]).state = CP_ARBITER_STATE_NORMAL
+            memcpy(saved, arbiters.arr, arbiters.num * sizeof(void *))
+            ctx.threadedCount = arbiters.num
+            arbiters.num = 0
+            return
+    StageResetArbiters(space)
+
+cdef int SoftRethreadArbiters(SoftContext *ctx, int collided) noexcept nogil:
+    # How many of this step's arbiters cpSpaceProcessComponents must thread:
+    # none if the lists hold them already.
+    cdef void **saved = <void **>ctx.space.softScratch.buf[SOFT_SCRATCH_THREADED]
+    cdef int i
+    if ctx.threadedCount < 0:
+        return collided
+    if (ctx.threadedCount == collided and collided == ctx.space.arbiters.num
+            and memcmp(saved, ctx.space.arbiters.arr, collided * sizeof(void *)) == 0):
+        tamias_add(&_kept_threads, 1)
+        return 0
+    for i in range(ctx.threadedCount):
+        cpArbiterUnthread(<cpArbiter *>saved[i])
+    return collided
 
 
 # -- gather ----------------------------------------------------------------------------
@@ -1853,7 +1906,7 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     SoftProfileMark(-1)
     # (Last step's contact count decides whether this one is threaded.)
     ctx.threaded = SoftPoolAcquire(space)
-    StageResetArbiters(space)
+    SoftResetArbiters(&ctx)
     cpSpaceLock(space)
     # No position update before the narrow phase: this solver moves the
     # bodies inside its substeps.
@@ -1862,7 +1915,7 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     cpSpaceUnlock(space, 0)
     SoftProfileMark(SOFT_STAGE_ARBITERS)
 
-    cpSpaceProcessComponents(space, dt, collided)
+    cpSpaceProcessComponents(space, dt, SoftRethreadArbiters(&ctx, collided))
 
     cpSpaceLock(space)
     StageFilterArbiterCache(space)
@@ -1945,6 +1998,20 @@ def _keep_broad_phase_pairs(on=None):
     if on is not None:
         _keep_pairs = bool(on)
     return bool(_keep_pairs)
+
+def _keep_arbiter_threads(on=None):
+    """Whether a soft step leaves last step's arbiters threaded on their
+    bodies until it knows whether this step's are the same (and, given `on`,
+    set it first; for tests, which check that unthreading every step, as
+    Munk2D, changes nothing)."""
+    global _keep_threads
+    if on is not None:
+        _keep_threads = bool(on)
+    return bool(_keep_threads)
+
+def _kept_threads_count():
+    """Steps so far (all spaces) whose arbiters were left threaded."""
+    return tamias_load(&_kept_threads)
 
 def _kept_walks_count():
     """Steps so far (all spaces) that took their pairs from a kept walk."""

@@ -215,13 +215,22 @@ cdef inline cpCollisionHandler *cpSpaceLookupHandler(cpSpace *space, cpCollision
 cdef void cpArbiterUpdate(cpArbiter *arb, cpCollisionInfo *info, cpSpace *space) noexcept nogil:
     cdef const cpShape *a = info.a
     cdef const cpShape *b = info.b
+    cdef cpArbiterThread thread
     cdef int i, j
     cdef cpContact *con
     cdef cpContact *old
     cdef cpVect surface_vr
     cdef cpCollisionType typeA, typeB
 
-    # Same-type pairs may come in the other order than last step.
+    # Same-type pairs may come in the other order than last step. (Not
+    # Munk2D's: the threads of the bodies' arbiter lists change places with
+    # the bodies, so that an arbiter still in the lists stays consistent;
+    # the soft solver keeps its arbiters threaded through the collision
+    # when the step's arbiters turn out the same, _soft_step.pyx.)
+    if arb.a != a:
+        thread = arb.thread_a
+        arb.thread_a = arb.thread_b
+        arb.thread_b = thread
     arb.a = a
     arb.body_a = a.body
     arb.b = b
