@@ -885,12 +885,8 @@ def test_arbiter_guesses_change_nothing(scene):
     # The broad phase remembers each pair's arbiter so that the narrow phase
     # need not look it up; a guess gone stale (arbiter pooled and reused,
     # shapes removed, bodies asleep) must be caught, never used.
-    import scenes
     from tamias2d import _soft_step
-    builds = {"sleepy_pile": _sleepy_pile,
-              "rain_persistence_1": lambda: _short_memory_rain(1),
-              "rain_persistence_0": lambda: _short_memory_rain(0)}
-    build = builds.get(scene) or (lambda: getattr(scenes, scene)(tamias2d))
+    build = _switch_scene(scene)
     assert _soft_step._arbiter_guesses()
     try:
         _soft_step._arbiter_guesses(False)
@@ -940,6 +936,17 @@ def _static_changes():
     return s
 
 
+# The scenes the same-bits tests below run with a switch off and on.
+_SWITCH_SCENES = {"sleepy_pile": _sleepy_pile, "static_changes": _static_changes,
+                  "rain_persistence_1": lambda: _short_memory_rain(1),
+                  "rain_persistence_0": lambda: _short_memory_rain(0)}
+
+
+def _switch_scene(name):
+    import scenes
+    return _SWITCH_SCENES.get(name) or (lambda: getattr(scenes, name)(tamias2d))
+
+
 @pytest.mark.parametrize("scene", ["pyramid", "add_remove", "type_changes", "sleepy_pile",
                                    "static_changes", "rain_persistence_0"])
 def test_kept_broad_phase_walks_change_nothing(scene):
@@ -947,11 +954,8 @@ def test_kept_broad_phase_walks_change_nothing(scene):
     # removed, the soft solver takes a step's pairs from the last walk over
     # the tree instead of walking it again: the same pairs in the same order,
     # so the same step. Any change to the trees must end that.
-    import scenes
     from tamias2d import _soft_step
-    builds = {"sleepy_pile": _sleepy_pile, "static_changes": _static_changes,
-              "rain_persistence_0": lambda: _short_memory_rain(0)}
-    build = builds.get(scene) or (lambda: getattr(scenes, scene)(tamias2d))
+    build = _switch_scene(scene)
     assert _soft_step._keep_broad_phase_pairs()
     try:
         _soft_step._keep_broad_phase_pairs(False)
@@ -976,11 +980,8 @@ def test_skipping_the_idle_arbiter_filter_changes_nothing(scene, solver):
     # (it would separate and expire none). Sleeping, waking, removal and
     # short persistence must make the step filter again: the same separate
     # callbacks at the same steps, and the same bodies.
-    import scenes
     from tamias2d import _space_step
-    builds = {"sleepy_pile": _sleepy_pile, "static_changes": _static_changes,
-              "rain_persistence_1": lambda: _short_memory_rain(1)}
-    build = builds.get(scene) or (lambda: getattr(scenes, scene)(tamias2d))
+    build = _switch_scene(scene)
 
     def run():
         s = build()
@@ -1026,12 +1027,8 @@ def test_arbiters_left_threaded_change_nothing(scene):
     # re-threads only if this step's differ: the lists (each body's arbiters
     # in order, and which bodies they join) and the bodies must be what
     # Munk2D's unthreading of every arbiter at every step gives.
-    import scenes
     from tamias2d import _soft_step
-    builds = {"static_changes": _static_changes,
-              "rain_persistence_1": lambda: _short_memory_rain(1),
-              "rain_persistence_0": lambda: _short_memory_rain(0)}
-    build = builds.get(scene) or (lambda: getattr(scenes, scene)(tamias2d))
+    build = _switch_scene(scene)
 
     def run():
         s = build()
