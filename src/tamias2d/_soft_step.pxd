@@ -5,15 +5,19 @@
 #
 # cpSoftStep is a pipeline, in this order (* : on the pool of a threaded
 # space, see "threads within one step" in _soft_step.pyx):
-#   StageResetArbiters                                      (shared)
-#   SoftCollide             broad phase lists the pairs (speculative margin,
-#                           cheap rejection); * narrow phase and the lookup
-#                           of cached arbiters; arbiters and begin /
-#                           pre_solve callbacks in the broad phase's order
+#   SoftResetArbiters       StageResetArbiters (shared), or last step's
+#                           arbiters left threaded on their bodies
+#   SoftCollide             broad phase lists the pairs (speculative margin;
+#                           or the last walk's, kept); * cheap rejection,
+#                           narrow phase and the lookup of cached arbiters;
+#                           arbiters and begin / pre_solve callbacks in the
+#                           broad phase's order
+#   SoftRethreadArbiters    unthread last step's arbiters if this step's differ
 #   cpSpaceProcessComponents, StageFilterArbiterCache       (shared)
-#   SoftGatherBodies        awake bodies into SoftBody / SoftState arrays
+#   SoftGatherBodies        * awake bodies into SoftBody / SoftState arrays
 #   SoftPrepareJoints       joint pre-solve callbacks, warm-start rescale
-#   SoftPrepareContacts     * arbiters into a contiguous SoftContact array;
+#   SoftPrepareContacts     * each body's contact count; * arbiters into a
+#                           contiguous SoftContact array;
 #                           each point's softness for its load
 #                           (SoftPointSoftness), the 2x2 block matrices
 #   SoftColorContacts       the constraint graph's colours; each colour's
@@ -23,8 +27,10 @@
 #     SoftWarmStart            last substep's impulses (joints, * contacts)
 #     SoftSolve(useBias=1)     joints, * soft contacts (normal rows only)
 #     SoftIntegratePositions   * position_func, delta position / rotation
-#     SoftRelax x2             SoftSolve without bias (rigid), with friction
-#   * SoftUnpackLanes, SoftApplyRestitution, * SoftStoreImpulses,
+#     SoftRelax x2             SoftSolve without bias (rigid), with friction;
+#                              the last adds the impulses to the step's totals
+#   * SoftUnpackLanes, SoftApplyRestitution, * SoftStoreImpulses (without
+#   restitution: * SoftUnpackLanes straight into the arbiters),
 #   * SoftFinishBodies, SoftFinishJoints
 #   StagePostSolve, unlock (post-step callbacks)            (shared)
 from tamias2d._config cimport cpFloat, cpBool

@@ -379,8 +379,8 @@ cdef struct cpSoftSettings:
 cdef struct cpSoftScratch:
     void *buf[16]                # indexed by _soft_step's SOFT_SCRATCH_* (< 16)
     int cap[16]                  # elements each buffer has room for
-    # The broad phase's last walk, kept in the candidates buffer: its pair
-    # count and the dynamic tree's version after it (0: no walk kept).
+    # The broad phase's last walk, kept in the SOFT_SCRATCH_PAIRS buffer: its
+    # pair count and the dynamic tree's version after it (0: no walk kept).
     int pairCount
     unsigned long long pairsVersion
 
