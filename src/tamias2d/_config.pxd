@@ -35,6 +35,24 @@ cdef extern from *:
     """
     void tamias_prefetch(const void *p) nogil
 
+cdef extern from *:
+    """
+    /* The index of the lowest set bit of a non-zero word. */
+    #if defined(__GNUC__) || defined(__clang__)
+    #define tamias_lowest_bit(x) __builtin_ctz(x)
+    #elif defined(_MSC_VER)
+    #include <intrin.h>
+    static __inline int tamias_lowest_bit(unsigned int x) {
+        unsigned long i; _BitScanForward(&i, x); return (int)i;
+    }
+    #else
+    static inline int tamias_lowest_bit(unsigned int x) {
+        int i = 0; while (!(x & 1u)) { x >>= 1; i++; } return i;
+    }
+    #endif
+    """
+    int tamias_lowest_bit(unsigned int x) nogil
+
 # chipmunk.h / chipmunk_private.h
 cdef enum:
     CP_MAX_CONTACTS_PER_ARBITER = 2

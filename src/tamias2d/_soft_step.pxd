@@ -95,6 +95,7 @@ cdef enum:
 # overflow, solved one by one after the colours.
 cdef enum:
     SOFT_GRAPH_COLORS = 24
+    SOFT_GRAPH_COLOR_MASK = (1 << SOFT_GRAPH_COLORS) - 1   # fits a body's uint32_t of colours
 
 # The kernels over lanes of contacts (SoftState, SoftLanes): _soft_lanes.h.
 cdef extern from "_soft_lanes.h" nogil:

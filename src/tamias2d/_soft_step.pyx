@@ -30,7 +30,7 @@ allocation, no Python except user integrators and joints' callbacks. Graph
 colouring and SIMD lanes can partition these arrays later.
 """
 from libc.math cimport INFINITY, pow, sqrt, cos, sin, fabs, fmin, fmax
-from libc.stdint cimport uint64_t
+from libc.stdint cimport uint32_t
 from libc.string cimport memset, memcmp
 from tamias2d._config cimport cpFloat, cpBool
 from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, cpArray, cpConstraint,
@@ -61,7 +61,7 @@ from tamias2d._bbtree cimport cpBBTreeReindexQuerySlots, cpPairSlot
 from tamias2d.collision cimport (cpCollideSoft, CollisionDiagnostics, cpCollisionTakeDiagnostics,
     cpCollisionPutDiagnostics)
 from tamias2d._config cimport (cpCollisionID, cpHashValue, CP_MAX_CONTACTS_PER_ARBITER,
-    CP_HASH_PAIR, tamias_prefetch)
+    CP_HASH_PAIR, tamias_prefetch, tamias_lowest_bit)
 from tamias2d._structs cimport cpCollisionInfo, cpHashSet, cpSegmentShape, CP_SEGMENT_SHAPE
 from libc.string cimport memcpy
 
@@ -127,7 +127,7 @@ cdef enum:
     SOFT_SCRATCH_CONTACTS
     SOFT_SCRATCH_LANES
     SOFT_SCRATCH_COLORS       # each contact's colour
-    SOFT_SCRATCH_BITS         # the colours' body bitsets
+    SOFT_SCRATCH_BITS         # the colours of each body, as bits
     SOFT_SCRATCH_OVERFLOW
     SOFT_SCRATCH_JOINT_BODIES
     SOFT_SCRATCH_SOURCE       # each contact's index in space.arbiters
@@ -1022,12 +1022,13 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
     # contact takes the first colour that holds neither of its movable
     # bodies; then each colour's contacts are packed SOFT_LANES to a lane,
     # two-point manifolds first, then one-point ones (lanes of one kind).
+    # Each body keeps the set of its colours as bits, so the first free
+    # colour of a pair is the lowest bit clear in both: no search.
     cdef cpSpace *space = ctx.space
     cdef int n = ctx.contactCount
-    cdef int words = (ctx.bodyCount + 63) >> 6
     cdef int i, c, col, a, b, k, total
-    cdef uint64_t *bits
-    cdef uint64_t *row
+    cdef uint32_t *used          # per body slot: the colours it is in
+    cdef uint32_t taken, bit
     cdef int *color
     cdef SoftColorKey *key
     cdef SoftLanes *ln
@@ -1035,12 +1036,12 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
     cdef int fill[2][SOFT_GRAPH_COLORS]
     cdef int start[2][SOFT_GRAPH_COLORS]     # first lane of each kind
     cdef int kind
-    bits = <uint64_t *>_reserve(space, SOFT_SCRATCH_BITS, SOFT_GRAPH_COLORS * words, sizeof(uint64_t))
+    used = <uint32_t *>_reserve(space, SOFT_SCRATCH_BITS, ctx.bodyCount, sizeof(uint32_t))
     color = <int *>_reserve(space, SOFT_SCRATCH_COLORS, n, sizeof(int))
     ctx.overflow = <int *>_reserve(space, SOFT_SCRATCH_OVERFLOW, n, sizeof(int))
-    if bits == NULL or color == NULL or ctx.overflow == NULL:
+    if used == NULL or color == NULL or ctx.overflow == NULL:
         return 0
-    memset(bits, 0, <size_t>SOFT_GRAPH_COLORS * words * sizeof(uint64_t))
+    memset(used, 0, <size_t>ctx.bodyCount * sizeof(uint32_t))
     for c in range(SOFT_GRAPH_COLORS):
         for kind in range(2):
             counts[kind][c] = 0
@@ -1052,20 +1053,19 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
         if key.kind >= 0:
             a = key.a
             b = key.b
-            # As Box2D: a contact with an immovable body never takes colour
-            # 0, so the first colour is solved between movable bodies only.
-            for c in range(0 if (a != 0 and b != 0) else 1, SOFT_GRAPH_COLORS):
-                row = bits + c * words
-                if a != 0 and (row[a >> 6] >> (a & 63)) & 1:
-                    continue
-                if b != 0 and (row[b >> 6] >> (b & 63)) & 1:
-                    continue
-                if a != 0:
-                    row[a >> 6] |= (<uint64_t>1) << (a & 63)
-                if b != 0:
-                    row[b >> 6] |= (<uint64_t>1) << (b & 63)
-                col = c
-                break
+            # Slot 0 (immovable) stays in no colour. As Box2D: a contact
+            # with an immovable body never takes colour 0, so the first
+            # colour is solved between movable bodies only.
+            taken = used[a] | used[b]
+            if a == 0 or b == 0:
+                taken |= 1
+            taken = ~taken & SOFT_GRAPH_COLOR_MASK
+            if taken != 0:
+                col = tamias_lowest_bit(taken)
+                bit = (<uint32_t>1) << col
+                used[a] |= bit
+                used[b] |= bit
+                used[0] = 0
         color[i] = col
         if col == SOFT_GRAPH_COLORS:
             ctx.overflow[ctx.overflowCount] = i
