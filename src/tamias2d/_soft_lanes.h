@@ -46,6 +46,7 @@ typedef struct {
     int ia[SOFT_LANES], ib[SOFT_LANES];   /* SoftState slots */
     int wa[SOFT_LANES], wb[SOFT_LANES];   /* write the body back (movable, not slot 0) */
     int src[SOFT_LANES];                  /* SoftContact index, -1: empty lane */
+    void *dst[SOFT_LANES];                /* its arbiter's cpContacts (the step's impulses go there) */
     double mA[SOFT_LANES], iA[SOFT_LANES], mB[SOFT_LANES], iB[SOFT_LANES];
     double nx[SOFT_LANES], ny[SOFT_LANES];
     double friction[SOFT_LANES], surfaceT[SOFT_LANES];
@@ -71,6 +72,7 @@ static inline void SoftLanesClear(SoftLanes *c, int k) {
     c->ia[k] = c->ib[k] = 0;
     c->wa[k] = c->wb[k] = 0;
     c->src[k] = -1;
+    c->dst[k] = 0;
     c->mA[k] = c->iA[k] = c->mB[k] = c->iB[k] = 0.0;
     c->nx[k] = 0.0; c->ny[k] = 1.0;
     c->friction[k] = c->surfaceT[k] = 0.0;

@@ -34,7 +34,7 @@
 #   * SoftFinishBodies, SoftFinishJoints
 #   StagePostSolve, unlock (post-step callbacks)            (shared)
 from tamias2d._config cimport cpFloat, cpBool
-from tamias2d._structs cimport (cpSpace, cpBody, cpArbiter, cpSoftSettings, cpSoftScratch,
+from tamias2d._structs cimport (cpSpace, cpBody, cpArbiter, cpContact, cpSoftSettings, cpSoftScratch,
     cpSoftness)
 from tamias2d.vector cimport cpVect
 
@@ -111,6 +111,7 @@ cdef extern from "_soft_lanes.h" nogil:
         int wa[SOFT_LANES]
         int wb[SOFT_LANES]
         int src[SOFT_LANES]
+        void *dst[SOFT_LANES]
         cpFloat mA[SOFT_LANES]
         cpFloat iA[SOFT_LANES]
         cpFloat mB[SOFT_LANES]
@@ -177,6 +178,7 @@ cdef struct SoftPoint:
 cdef struct SoftContact:
     int ia, ib                # SoftBody / SoftState slots
     int count                 # 1 or 2 points
+    cpContact *dst            # arb.contacts, read with the slots (not through arb)
     cpFloat nx, ny
     cpFloat friction, restitution
     cpFloat surfaceT          # surface velocity along the tangent

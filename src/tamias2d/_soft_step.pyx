@@ -905,6 +905,7 @@ cdef void SoftPrepareContactRange(SoftContext *ctx, int begin, int end) noexcept
         sa = &ctx.states[sc.ia]
         sb = &ctx.states[sc.ib]
         sc.count = arb.count if arb.count <= 2 else 2
+        sc.dst = arb.contacts
         size = SoftContactSize(arb)
         maxStiffening = SoftMaxStiffening(a, b)
         nx = arb.n.x
@@ -1123,6 +1124,7 @@ cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, int k, int i) noexcept n
     ln.wa[k] = SoftMovable(ctx, sc.ia)
     ln.wb[k] = SoftMovable(ctx, sc.ib)
     ln.src[k] = i
+    ln.dst[k] = sc.dst
     ln.mA[k] = a.m_inv
     ln.iA[k] = a.i_inv
     ln.mB[k] = b.m_inv
@@ -1408,13 +1410,16 @@ cdef void SoftUnpackLanes(SoftContext *ctx, int begin, int end, bint store) noex
         for k in range(SOFT_LANES):
             if ln.src[k] < 0:
                 continue
+            if store:
+                # Through the lane's own pointer: the SoftContact (read in
+                # colour order, out of its order) is not touched.
+                con = <cpContact *>ln.dst[k]
+                for j in range(ln.points):
+                    con[j].jnAcc = ln.totalNormal[j][k]
+                    con[j].jtAcc = ln.totalTangent[j][k]
+                continue
             sc = &ctx.contacts[ln.src[k]]
             for j in range(sc.count):
-                if store:
-                    con = &sc.arb.contacts[j]
-                    con.jnAcc = ln.totalNormal[j][k]
-                    con.jtAcc = ln.totalTangent[j][k]
-                    continue
                 sp = &sc.p[j]
                 sp.normalImpulse = ln.normalImpulse[j][k]
                 sp.tangentImpulse = ln.tangentImpulse[j][k]
