@@ -50,7 +50,7 @@ from tamias2d.body cimport cpBodyGetType, cpBodyUpdateVelocity, cpBodyUpdatePosi
 from tamias2d.constraints cimport tamias_constraint_scale_impulse
 from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, StageResetArbiters,
     cpSpaceProcessComponents, StageFilterArbiterCache, StagePostSolve,
-    cpSpaceRejectPair, cpSpaceAcceptCollision, cpSpacePushFreshContactBuffer,
+    cpSpaceRejectPair, cpSpaceAcceptCollision, cpSpacePairIsSolid, cpSpacePushFreshContactBuffer,
     cpContactBufferGetArray, cpSpacePushContacts, cpSpaceCollideShapes, cpShapeUpdateFunc,
     cpSpaceHasHandlers)
 from tamias2d.arbiter cimport cpArbiterUpdate, cpArbiterUnthread
@@ -175,6 +175,7 @@ cdef struct SoftCandidate:
     cpFloat margin            # the pair's (cpSpaceRejectPair)
     cpArbiter *arb            # its arbiter if cached (looked up with the narrow phase)
     bint updated              # arb has this step's contacts (cpArbiterUpdate done)
+    bint solid                # with updated: cpSpacePairIsSolid, read while the shapes are at hand
     cpCollisionInfo info
     cpContact contacts[CP_MAX_CONTACTS_PER_ARBITER]
 
@@ -429,6 +430,7 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
                 # them to the contact buffer.
                 cpArbiterUpdate(c.arb, &c.info, ctx.space)
                 c.updated = 1
+                c.solid = cpSpacePairIsSolid(p.a, p.b)
 
 cdef inline void SoftPrefetchArbiter(cpSpace *space, SoftCandidate *c) noexcept nogil:
     cdef cpHashSet *arbs = space.cachedArbiters
@@ -521,7 +523,7 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
             c.arb.contacts = contacts
         cpSpacePushContacts(space, c.info.count)
         arb = cpSpaceAcceptCollision(space, ctx.pairs[i].a, ctx.pairs[i].b, &c.info, c.arb,
-                                     c.updated)
+                                     c.updated, c.solid if c.updated else -1)
         if ctx.pairs[i].slot != NULL and c.arb == NULL:
             ctx.pairs[i].slot.arbiter = arb    # new this step: next step's guess
 

@@ -57,7 +57,10 @@ cdef cpCollisionID cpSpaceCollideShapes(void *a, void *b, cpCollisionID id, void
 cdef cpBool cpSpaceRejectPair(cpSpace *space, cpShape *a, cpShape *b, cpFloat *margin) noexcept nogil
 cdef cpArbiter *cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
                                        cpCollisionInfo *info, cpArbiter *found,
-                                       bint updated) noexcept nogil
+                                       bint updated, int solid) noexcept nogil
+# cpSpaceAcceptCollision's test of a pair's shapes and bodies (not a sensor,
+# not both of infinite mass), which a caller may make beforehand.
+cdef bint cpSpacePairIsSolid(const cpShape *a, const cpShape *b) noexcept nogil
 # Whether any collision handler of the space acts in one of these phases.
 cdef bint cpSpaceHasHandlers(cpSpace *space, bint begin, bint preSolve,
                              bint postSolve) noexcept nogil

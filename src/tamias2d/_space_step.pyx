@@ -270,19 +270,23 @@ cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID 
     if info.count == 0:
         return info.id
     cpSpacePushContacts(space, info.count)
-    cpSpaceAcceptCollision(space, a, b, &info, NULL, 0)
+    cpSpaceAcceptCollision(space, a, b, &info, NULL, 0, -1)
     return info.id
+
+cdef bint cpSpacePairIsSolid(const cpShape *a, const cpShape *b) noexcept nogil:
+    return not (a.sensor or b.sensor) and not (a.body.m == INFINITY and b.body.m == INFINITY)
 
 # What follows the narrow phase for a pair that touches (its contacts pushed
 # on the space's contact buffer): the persistent arbiter (`found` if the
 # caller looked it up already, else looked up or made here), begin and
 # pre-solve callbacks, the arbiter into this step's list. `updated`: the
 # caller ran cpArbiterUpdate on `found` already, which it does only when no
-# handler acts on begin or pre-solve. Returns the arbiter (NULL out of
-# memory).
+# handler acts on begin or pre-solve. `solid`: cpSpacePairIsSolid of the
+# pair, when the caller knows it (it can only change in a callback, and none
+# ran: `updated`), else -1. Returns the arbiter (NULL out of memory).
 cdef cpArbiter *cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
                                        cpCollisionInfo *info, cpArbiter *found,
-                                       bint updated) noexcept nogil:
+                                       bint updated, int solid) noexcept nogil:
     cdef const cpShape *shape_pair[2]
     cdef cpHashValue arbHashID
     cdef cpArbiter *arb
@@ -312,10 +316,9 @@ cdef cpArbiter *cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
     # (Else no handler acts on begin or pre-solve, see `updated`: the calls
     # would only flip `swapped` an even number of times.)
 
-    if (arb.state != CP_ARBITER_STATE_IGNORE
-            and arb.processCollision
-            and not (a.sensor or b.sensor)
-            and not (a.body.m == INFINITY and b.body.m == INFINITY)):
+    if solid < 0:
+        solid = cpSpacePairIsSolid(a, b)
+    if arb.state != CP_ARBITER_STATE_IGNORE and arb.processCollision and solid:
         if not cpArrayPush(space.arbiters, arb):
             pass  # out of memory: the flag is up, the pair goes unsolved
     else:
