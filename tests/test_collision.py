@@ -488,7 +488,7 @@ def _soft_finds_what_munk2d_finds(a, b, margin, trial):
 def test_separating_axes_find_what_epa_finds(seed):
     # Where the polygons overlap, the soft solver's narrow phase must find
     # the contacts Munk2D's GJK and EPA find (same features, same normal and
-    # points up to EPA's tolerance); apart, it is Munk2D's code itself.
+    # points up to EPA's tolerance); apart, see the next test.
     import random
     rng = random.Random(seed)
     overlapping = 0
@@ -503,6 +503,54 @@ def test_separating_axes_find_what_epa_finds(seed):
             assert first == first_s
             overlapping += touching and margin == 0.0
     assert overlapping > 50          # the test saw the new path at work
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_polygons_apart_find_what_gjk_finds(seed):
+    # Cores apart but within the margin (speculative contacts): the soft
+    # solver's narrow phase takes the reference face and the face most
+    # against it, corner to corner where both nearest points are corners,
+    # where Munk2D runs GJK: the same features, normal and points. Boxes
+    # corner to corner and random polygons, at margins up to half a size.
+    import random
+    rng = random.Random(100 + seed)
+    apart = corners = 0
+    for trial in range(400):
+        if trial % 2:
+            a = _random_polygon(rng, (0, 0), 1.0, rng.randint(3, 8), rng.random() * 7)
+            direction = rng.random() * 7
+            offset = 2.0 + 1.0 * rng.random()
+            b = _random_polygon(rng, (offset * math.cos(direction), offset * math.sin(direction)),
+                                1.0, rng.randint(3, 8), rng.random() * 7)
+        else:
+            # Two unit boxes, the second turned, about a corner's reach apart.
+            a = tamias2d.Poly.create_box(tamias2d.Body(1, 1), (1, 1))
+            body = tamias2d.Body(1, 1)
+            body.angle = rng.uniform(-math.pi, math.pi)
+            if trial % 4 == 0:
+                # Along a diagonal of the first, a corner's reach off: corners meet.
+                body.angle = rng.uniform(0.15, 0.6)
+                direction = math.pi / 4 + math.pi / 2 * rng.randint(0, 3) + rng.uniform(-0.1, 0.1)
+                offset = rng.uniform(1.42, 1.8)
+            else:
+                direction = rng.uniform(-math.pi, math.pi)
+                offset = rng.uniform(1.0, 1.6)
+            body.position = (offset * math.cos(direction), offset * math.sin(direction))
+            b = tamias2d.Poly.create_box(body, (1, 1))
+            a.cache_bb()
+            b.cache_bb()
+        for margin in (0.05, 0.2, 0.5):
+            first, first_s, touching = _soft_finds_what_munk2d_finds(a, b, margin, trial)
+            assert first == first_s
+            _, _, n, contacts = _testing._collide(a, b, margin=margin, soft=True)
+            if touching and all((p2 - p1).dot(n) > 1e-9 for p1, p2, _ in contacts):
+                apart += 1
+                # Corner to corner: the normal is along no face of either box.
+                rot = b.body.rotation_vector
+                if trial % 2 == 0 and min(abs(n.x), abs(n.y), abs(n.cross(rot)),
+                                          abs(n.dot(rot))) > 1e-6:
+                    corners += 1
+    assert apart > 100 and corners > 10, (apart, corners)   # the new path, and its corners
 
 
 @pytest.mark.parametrize("seed", range(4))

@@ -684,6 +684,88 @@ cdef inline cpFloat PolyFaceSeparation(const cpPolyShape *ref, const cpPolyShape
         return PolyFaceSeparationOf(ref, inc, 4, 4, stop, face)
     return PolyFaceSeparationOf(ref, inc, ref.count, inc.count, stop, face)
 
+cdef inline int PolyIncidentFace(const cpPolyShape *poly, const cpVect n) noexcept nogil:
+    # The face of `poly` whose normal points most against n.
+    cdef int i, face = 0
+    cdef cpFloat d, least = INFINITY
+    for i in range(poly.count):
+        d = cpvdot(n, poly.planes[i].n)
+        if d < least:
+            least = d
+            face = i
+    return face
+
+cdef inline cpVect ClosestOnSegment(const cpVect p, const cpVect a, const cpVect b,
+                                    bint *atEnd) noexcept nogil:
+    # The point of segment ab nearest p, and whether it is an end.
+    cdef cpVect ab = cpvsub(b, a)
+    cdef cpFloat len2 = cpvlengthsq(ab)
+    cdef cpFloat t = cpvdot(cpvsub(p, a), ab) / len2 if len2 > 0.0 else 0.0
+    atEnd[0] = t <= 0.0 or t >= 1.0
+    return cpvadd(a, cpvmult(ab, cpfclamp01(t)))
+
+cdef void PolyToPolyApart(const cpPolyShape *poly1, const cpPolyShape *poly2,
+                          cpFloat sep1, int face1, cpFloat sep2, int face2,
+                          cpCollisionInfo *info) noexcept nogil:
+    # Cores apart but within the margin (a speculative contact). The nearest
+    # features are on the reference face (the one that separates most) and
+    # the other polygon's face most against it (Box2D's polygon collider
+    # finds them the same way): if both nearest points are corners, the
+    # normal runs corner to corner, else it is the reference face's. Then
+    # the contacts as for any normal. No GJK iterations.
+    cdef const cpPolyShape *ref = poly1
+    cdef const cpPolyShape *inc = poly2
+    cdef int refFace = face1
+    cdef int incFace, k
+    cdef cpFloat sep = sep1
+    cdef cpFloat sign = 1.0
+    cdef cpFloat best = INFINITY
+    cdef cpFloat d2
+    cdef cpVect ends[4]
+    cdef cpVect onRef, onInc, q, nearRef, nearInc
+    cdef bint corner = 0
+    cdef bint atEnd
+    cdef ClosestPoints points
+    if sep2 > sep1:
+        ref = poly2
+        inc = poly1
+        refFace = face2
+        sep = sep2
+        sign = -1.0       # the normal points from poly1 to poly2
+    incFace = PolyIncidentFace(inc, ref.planes[refFace].n)
+    ends[0] = ref.planes[(refFace - 1 + ref.count) % ref.count].v0
+    ends[1] = ref.planes[refFace].v0
+    ends[2] = inc.planes[(incFace - 1 + inc.count) % inc.count].v0
+    ends[3] = inc.planes[incFace].v0
+    # The segments do not cross (the cores are apart): the nearest pair has
+    # an end of one of them. Ties go to the first found.
+    for k in range(4):
+        if k < 2:
+            onRef = ends[k]
+            onInc = ClosestOnSegment(onRef, ends[2], ends[3], &atEnd)
+        else:
+            onInc = ends[k]
+            onRef = ClosestOnSegment(onInc, ends[0], ends[1], &atEnd)
+        q = cpvsub(onInc, onRef)
+        d2 = cpvlengthsq(q)
+        if d2 < best:
+            best = d2
+            corner = atEnd
+            nearRef = onRef
+            nearInc = onInc
+    points.d = sqrt(best)
+    points.n = ref.planes[refFace].n
+    # Corner to corner, and farther than the face's separation (else the
+    # face normal is as good, and safe to use when the corners nearly touch).
+    if corner and points.d > sep * (1.0 + 1e-9):
+        points.n = cpvmult(cpvsub(nearInc, nearRef), 1.0 / points.d)
+    points.n = cpvmult(points.n, sign)
+    points.a = cpv(0.0, 0.0)
+    points.b = cpv(0.0, 0.0)
+    points.id = info.id
+    ContactPoints(SupportEdgeForPoly(poly1, points.n), SupportEdgeForPoly(poly2, cpvneg(points.n)),
+                  points, info)
+
 cdef void PolyToPolySeparatingAxes(const cpShape *a, const cpShape *b,
                                    cpCollisionInfo *info) noexcept nogil:
     cdef const cpPolyShape *poly1 = <const cpPolyShape *>a
@@ -702,14 +784,11 @@ cdef void PolyToPolySeparatingAxes(const cpShape *a, const cpShape *b,
     sep1 = PolyFaceSeparation(poly1, poly2, reach, &face1)
     if sep1 > reach:
         return
-    if sep1 > 0.0:
-        PolyToPoly(a, b, info)
-        return
     sep2 = PolyFaceSeparation(poly2, poly1, reach, &face2)
     if sep2 > reach:
         return
-    if sep2 > 0.0:
-        PolyToPoly(a, b, info)
+    if sep1 > 0.0 or sep2 > 0.0:
+        PolyToPolyApart(poly1, poly2, sep1, face1, sep2, face2, info)
         return
     # The shallower of the two (a tie to poly1's face); the normal points
     # from poly1 to poly2 either way. Only n and d are read by the clipping.
