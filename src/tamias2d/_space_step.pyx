@@ -316,9 +316,8 @@ cdef cpArbiter *cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
     # (Else no handler acts on begin or pre-solve, see `updated`: the calls
     # would only flip `swapped` an even number of times.)
 
-    if solid < 0:
-        solid = cpSpacePairIsSolid(a, b)
-    if arb.state != CP_ARBITER_STATE_IGNORE and arb.processCollision and solid:
+    if (arb.state != CP_ARBITER_STATE_IGNORE and arb.processCollision
+            and (solid > 0 or (solid < 0 and cpSpacePairIsSolid(a, b)))):
         if not cpArrayPush(space.arbiters, arb):
             pass  # out of memory: the flag is up, the pair goes unsolved
     else:

@@ -684,6 +684,19 @@ cdef inline cpFloat PolyFaceSeparation(const cpPolyShape *ref, const cpPolyShape
         return PolyFaceSeparationOf(ref, inc, 4, 4, stop, face)
     return PolyFaceSeparationOf(ref, inc, ref.count, inc.count, stop, face)
 
+cdef inline void PolyContactsAlong(const cpPolyShape *poly1, const cpPolyShape *poly2,
+                                   const cpVect n, const cpFloat d,
+                                   cpCollisionInfo *info) noexcept nogil:
+    # The contacts of two polygons whose cores are d apart along n (from
+    # poly1 to poly2): ContactPoints reads only the normal and the distance.
+    cdef ClosestPoints points
+    points.n = n
+    points.d = d
+    points.a = cpv(0.0, 0.0)
+    points.b = cpv(0.0, 0.0)
+    points.id = info.id
+    ContactPoints(SupportEdgeForPoly(poly1, n), SupportEdgeForPoly(poly2, cpvneg(n)), points, info)
+
 cdef inline int PolyIncidentFace(const cpPolyShape *poly, const cpVect n) noexcept nogil:
     # The face of `poly` whose normal points most against n.
     cdef int i, face = 0
@@ -697,7 +710,8 @@ cdef inline int PolyIncidentFace(const cpPolyShape *poly, const cpVect n) noexce
 
 cdef inline cpVect ClosestOnSegment(const cpVect p, const cpVect a, const cpVect b,
                                     bint *atEnd) noexcept nogil:
-    # The point of segment ab nearest p, and whether it is an end.
+    # The point of segment ab nearest p, and whether it is an end (what
+    # cpClosetPointOnSegment does not tell).
     cdef cpVect ab = cpvsub(b, a)
     cdef cpFloat len2 = cpvlengthsq(ab)
     cdef cpFloat t = cpvdot(cpvsub(p, a), ab) / len2 if len2 > 0.0 else 0.0
@@ -722,10 +736,10 @@ cdef void PolyToPolyApart(const cpPolyShape *poly1, const cpPolyShape *poly2,
     cdef cpFloat best = INFINITY
     cdef cpFloat d2
     cdef cpVect ends[4]
-    cdef cpVect onRef, onInc, q, nearRef, nearInc
+    cdef cpVect onRef, onInc, nearRef, nearInc, n
+    cdef cpFloat d
     cdef bint corner = 0
     cdef bint atEnd
-    cdef ClosestPoints points
     if sep2 > sep1:
         ref = poly2
         inc = poly1
@@ -746,31 +760,24 @@ cdef void PolyToPolyApart(const cpPolyShape *poly1, const cpPolyShape *poly2,
         else:
             onInc = ends[k]
             onRef = ClosestOnSegment(onInc, ends[0], ends[1], &atEnd)
-        q = cpvsub(onInc, onRef)
-        d2 = cpvlengthsq(q)
+        d2 = cpvlengthsq(cpvsub(onInc, onRef))
         if d2 < best:
             best = d2
             corner = atEnd
             nearRef = onRef
             nearInc = onInc
-    points.d = sqrt(best)
-    points.n = ref.planes[refFace].n
+    d = sqrt(best)
+    n = ref.planes[refFace].n
     # Corner to corner, and farther than the face's separation (else the
     # face normal is as good, and safe to use when the corners nearly touch).
-    if corner and points.d > sep * (1.0 + 1e-9):
-        points.n = cpvmult(cpvsub(nearInc, nearRef), 1.0 / points.d)
-    points.n = cpvmult(points.n, sign)
-    points.a = cpv(0.0, 0.0)
-    points.b = cpv(0.0, 0.0)
-    points.id = info.id
-    ContactPoints(SupportEdgeForPoly(poly1, points.n), SupportEdgeForPoly(poly2, cpvneg(points.n)),
-                  points, info)
+    if corner and d > sep * (1.0 + 1e-9):
+        n = cpvmult(cpvsub(nearInc, nearRef), 1.0 / d)
+    PolyContactsAlong(poly1, poly2, cpvmult(n, sign), d, info)
 
 cdef void PolyToPolySeparatingAxes(const cpShape *a, const cpShape *b,
                                    cpCollisionInfo *info) noexcept nogil:
     cdef const cpPolyShape *poly1 = <const cpPolyShape *>a
     cdef const cpPolyShape *poly2 = <const cpPolyShape *>b
-    cdef ClosestPoints points
     cdef int face1, face2
     cdef cpFloat sep1, sep2
     # Apart by more than this along any axis: no contact within the margin
@@ -793,16 +800,9 @@ cdef void PolyToPolySeparatingAxes(const cpShape *a, const cpShape *b,
     # The shallower of the two (a tie to poly1's face); the normal points
     # from poly1 to poly2 either way. Only n and d are read by the clipping.
     if sep2 > sep1:
-        points.n = cpvneg(poly2.planes[face2].n)
-        points.d = sep2
+        PolyContactsAlong(poly1, poly2, cpvneg(poly2.planes[face2].n), sep2, info)
     else:
-        points.n = poly1.planes[face1].n
-        points.d = sep1
-    points.a = cpv(0.0, 0.0)
-    points.b = cpv(0.0, 0.0)
-    points.id = info.id
-    ContactPoints(SupportEdgeForPoly(poly1, points.n), SupportEdgeForPoly(poly2, cpvneg(points.n)),
-                  points, info)
+        PolyContactsAlong(poly1, poly2, poly1.planes[face1].n, sep1, info)
 
 # The soft solver's circle-polygon pairs: where the circle's centre is
 # inside the polygon's core, the face it is least deep behind gives the
