@@ -552,7 +552,7 @@ def test_a_heavy_chain_holds_in_the_soft_solver():
 
 # The cases the soft solver passes at its defaults in CI lengths (docs/stability.md).
 SOFT_PASSES = {
-    "stack_10", "stack_20", "pyramid_20", "mass_ratio_10", "mass_ratio_100", "tunnel",
+    "stack_10", "stack_20", "stack_40", "pyramid_20", "mass_ratio_10", "mass_ratio_100", "tunnel",
     "scale_1e-3", "far_1e6", "poly_collinear", "poly_duplicate", "poly_sliver",
     "poly_1000_tube", "poly_256_floor", "zero_radius_floor", "zero_radius_pair",
     "coincident_circles",
@@ -569,6 +569,50 @@ def test_hard_case_in_soft_solver(name):
     assert not r.error and not r.nan, (r.error, r.metrics)
     if name in SOFT_PASSES:
         assert r.passed, r.metrics
+
+
+def _kinetic_energy(bodies):
+    return sum(b.mass * b.velocity.length_squared for b in bodies) / 2.0
+
+
+def test_preloaded_stack_stands_at_no_depth_and_at_rest():
+    # A chain's contacts hold their load at no depth (SoftPreload): no
+    # sag that grows with the load below, and no bouncing of the column.
+    sc = hc.build_stack(tamias2d, 20)
+    sc.space.solver = "soft"
+    for _ in range(900):
+        sc.space.step(DT)
+    boxes = sc.watch["boxes"]
+    ys = [b.position.y for b in boxes]
+    assert abs(ys[0] - 10.0) < 1e-9
+    assert max(abs(ys[i + 1] - ys[i] - 20.0) for i in range(len(ys) - 1)) < 1e-9
+    assert _kinetic_energy(boxes) < 1e-15
+
+
+def test_heavy_box_on_light_box_stands_up_to_the_preload_ratio():
+    # A box 300 times heavier than the one under it: preloaded, no
+    # overlap; 1000 times: not preloaded (it would bounce), stiffened, a
+    # steady overlap of about a third of a box but at rest.
+    for ratio, overlap in ((300.0, 1e-6), (1000.0, 8.0)):
+        sc = hc.build_mass_ratio(tamias2d, ratio=ratio)
+        sc.space.solver = "soft"
+        for _ in range(1800):
+            sc.space.step(DT)
+        light, heavy = sc.watch["light"], sc.watch["heavy"]
+        assert 20.0 - (heavy.position.y - light.position.y) < overlap, ratio
+        assert abs(light.position.y - 10.0) < 1e-3, ratio
+        assert abs(heavy.velocity.y) < 1e-3, ratio
+
+
+def test_pyramid_comes_to_rest():
+    # In a web of contacts only part of the load is preloaded: with all of
+    # it the loads wander between a box's supports and a big pyramid
+    # never settles.
+    sc = hc.build_pyramid(tamias2d, rows=40)
+    sc.space.solver = "soft"
+    for _ in range(1800):
+        sc.space.step(DT)
+    assert _kinetic_energy(sc.watch["boxes"]) < 1e-6
 
 
 @pytest.mark.parametrize("scale", [1e-3, 1e3])

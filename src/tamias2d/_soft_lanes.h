@@ -54,7 +54,7 @@ typedef struct {
     double rAx[2][SOFT_LANES], rAy[2][SOFT_LANES], rBx[2][SOFT_LANES], rBy[2][SOFT_LANES];
     double rnA[2][SOFT_LANES], rnB[2][SOFT_LANES], rtA[2][SOFT_LANES], rtB[2][SOFT_LANES];
     double base[2][SOFT_LANES];           /* adjusted separation */
-    double biasRate[2][SOFT_LANES], compliance[2][SOFT_LANES];
+    double biasRate[2][SOFT_LANES], compliance[2][SOFT_LANES], preload[2][SOFT_LANES];
     double tangentMass[2][SOFT_LANES];
     double normalImpulse[2][SOFT_LANES], tangentImpulse[2][SOFT_LANES];
     double maxNormalImpulse[2][SOFT_LANES];
@@ -81,7 +81,7 @@ static inline void SoftLanesClear(SoftLanes *c, int k) {
         c->rAx[p][k] = c->rAy[p][k] = c->rBx[p][k] = c->rBy[p][k] = 0.0;
         c->rnA[p][k] = c->rnB[p][k] = c->rtA[p][k] = c->rtB[p][k] = 0.0;
         c->base[p][k] = SOFT_LANE_FAR;
-        c->biasRate[p][k] = c->compliance[p][k] = 0.0;
+        c->biasRate[p][k] = c->compliance[p][k] = c->preload[p][k] = 0.0;
         c->tangentMass[p][k] = 0.0;
         c->normalImpulse[p][k] = c->tangentImpulse[p][k] = 0.0;
         c->maxNormalImpulse[p][k] = 0.0;

@@ -54,7 +54,7 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
         V vbx = sB[0], vby = sB[1], wb = sB[2];
         V qcA = sA[5], qsA = sA[6], qcB = sB[5], qsB = sB[6];
         V ddx = sB[3] - sA[3], ddy = sB[4] - sA[4];
-        V bias[2], gamma[2];
+        V bias[2], gamma[2], held[2];
         V lin, x01, x02, k11, k12, k22, a11, a22, q1, q2, det, x1, x2, y1, z2, n1, n2, d1, d2, imp;
         M ok1, ok2, ok3, ok4;
         int points = c->points;
@@ -72,19 +72,23 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
                 b = V_SEL(V_LT(b, negPush), negPush, b);
                 bias[j] = V_SEL(spec, s * inv_h, b);
                 gamma[j] = V_SEL(spec, zero, L(c->compliance[j]));
+                /* The part of the warm start the preload holds at no depth. */
+                V x0 = L(c->normalImpulse[j]), pre = L(c->preload[j]);
+                held[j] = V_SEL(V_LT(x0, pre), x0, pre);
             } else {
                 bias[j] = V_SEL(spec, s * inv_h, zero);
                 gamma[j] = zero;
+                held[j] = zero;
             }
         }
         lin = (vbx - vax) * nx + (vby - vay) * ny;
         if (points == 1) {
-            /* One row: (k + k gamma) dx = -(vn + bias) - k gamma x0, x >= 0. */
+            /* One row: (k + k gamma) dx = -(vn + bias) - k gamma (x0 - held), x >= 0. */
             V m1;
             x01 = L(c->normalImpulse[0]);
             k11 = L(c->k11);
             q1 = lin + wb * L(c->rnB[0]) - wa * L(c->rnA[0]) + bias[0];
-            n1 = x01 - (q1 + k11 * gamma[0] * x01) / (k11 * (one + gamma[0]));
+            n1 = x01 - (q1 + k11 * gamma[0] * (x01 - held[0])) / (k11 * (one + gamma[0]));
             n1 = V_SEL(V_LT(n1, zero), zero, n1);
             S(c->normalImpulse[0], n1);
             m1 = L(c->maxNormalImpulse[0]);
@@ -104,8 +108,8 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
         k11 = L(c->k11); k12 = L(c->k12); k22 = L(c->k22);
         a11 = k11 * (one + gamma[0]);
         a22 = k22 * (one + gamma[1]);
-        q1 = lin + wb * L(c->rnB[0]) - wa * L(c->rnA[0]) + bias[0] - (k11 * x01 + k12 * x02);
-        q2 = lin + wb * L(c->rnB[1]) - wa * L(c->rnA[1]) + bias[1] - (k12 * x01 + k22 * x02);
+        q1 = lin + wb * L(c->rnB[0]) - wa * L(c->rnA[0]) + bias[0] - (k11 * x01 + k12 * x02) - k11 * gamma[0] * held[0];
+        q2 = lin + wb * L(c->rnB[1]) - wa * L(c->rnA[1]) + bias[1] - (k12 * x01 + k22 * x02) - k22 * gamma[1] * held[1];
         det = a11 * a22 - k12 * k12;
         x1 = (k12 * q2 - a22 * q1) / det;
         x2 = (k12 * q1 - a11 * q2) / det;

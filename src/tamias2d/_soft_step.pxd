@@ -67,17 +67,24 @@ cdef const cpFloat SOFT_RESTITUTION_TOLERANCE = 1e-6
 # largest bounce was at rest (resting contacts keep from closing in the
 # restitution passes).
 cdef const cpFloat SOFT_RESTING_FRACTION = 1e-3
-# A loaded contact point is stiffened so that its load sinks it at most this
-# fraction of the smaller of the two bodies' sizes (SoftPointSoftness) ...
+# A loaded contact point is preloaded: its soft spring holds this fraction of
+# its (filtered) load at no depth (SoftPreload) in a chain, where both bodies
+# have at most two contacts (stacks, arches, a box on a box) ...
+cdef const cpFloat SOFT_PRELOAD_CHAIN = 1.0
+# ... and this fraction in a web of contacts (a pyramid's), whose loads are
+# not fixed by the bodies' weights: with all of it there the loads wander
+# from contact to contact and a 40-row pyramid never comes to rest ...
+cdef const cpFloat SOFT_PRELOAD_WEB = 0.5
+# ... and none between bodies whose masses differ more than this (a heavy
+# body on a light one bounces on a preloaded contact: Gauss-Seidel does not
+# converge there within a step). Such a point is stiffened instead so that
+# its load sinks it at most SOFT_MAX_LOAD_DEFLECTION of the smaller body's
+# size, up to SOFT_RATIO_STIFFENING times (SoftPointSoftness).
+cdef const cpFloat SOFT_PRELOAD_MAX_RATIO = 300.0
 cdef const cpFloat SOFT_MAX_LOAD_DEFLECTION = 0.005
-# ... but at most this many times between bodies of alike mass, and down to
-# SOFT_MIN_STIFFENING_CAP as their mass ratio grows (stiffer, Gauss-Seidel
-# no longer converges where a light body carries a heavy one, and the pair
-# starts to bounce) ...
-cdef const cpFloat SOFT_MAX_STIFFENING = 10.0
-cdef const cpFloat SOFT_MIN_STIFFENING_CAP = 5.0
-# ... and the load it is stiffened for moves this fraction of the way to the
-# last step's load per step (a low-pass filter).
+cdef const cpFloat SOFT_RATIO_STIFFENING = 5.0
+# The load moves this fraction of the way to the last step's load per step
+# (a low-pass filter).
 cdef const cpFloat SOFT_LOAD_SMOOTHING = 0.1
 # A point's first steps average its loads instead (1 / age), up to this age.
 cdef const cpFloat SOFT_LOAD_AGE = 10.0
@@ -134,6 +141,7 @@ cdef extern from "_soft_lanes.h" nogil:
         cpFloat base[2][SOFT_LANES]
         cpFloat biasRate[2][SOFT_LANES]
         cpFloat compliance[2][SOFT_LANES]
+        cpFloat preload[2][SOFT_LANES]
         cpFloat tangentMass[2][SOFT_LANES]
         cpFloat normalImpulse[2][SOFT_LANES]
         cpFloat tangentImpulse[2][SOFT_LANES]
@@ -173,6 +181,7 @@ cdef struct SoftPoint:
     cpFloat relativeVelocity                  # normal speed at the step's start
     cpFloat biasRate, massScale, impulseScale # softness (SoftSoftness) of this point
     cpFloat compliance                        # impulseScale / massScale (block solver)
+    cpFloat preload                           # the impulse it holds at no depth (SoftPreload)
 
 # One arbiter's contact constraint, prepared once per step.
 cdef struct SoftContact:

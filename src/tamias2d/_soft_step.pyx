@@ -19,8 +19,9 @@ which a contact carries its load, as in Box2D, not left alone up to the slop.
 Beyond Box2D's soft step (docs/stability.md measures each):
   * a two-point manifold's normal rows are solved together (SoftSolve),
     so tall stacks do not buckle from the order the corners are solved in;
-  * a loaded point is stiffened for its load (SoftPointSoftness), so the
-    bottom of a tall stack or pyramid sinks no deeper than the top;
+  * a loaded point's spring is preloaded with its load (SoftPreload), so a
+    tall stack or a box under a heavier one stands at no depth, and a
+    pyramid's bottom sinks half as deep as without;
   * two relax passes per substep (SOFT_RELAX_ITERATIONS).
 
 Layout: bodies are gathered into one contiguous SoftBody array (slot 0 is the
@@ -767,32 +768,37 @@ cdef inline cpFloat SoftContactSize(cpArbiter *arb) noexcept nogil:
         return sa
     return fmin(sa, sb)
 
-cdef inline cpFloat SoftMaxStiffening(SoftBody *a, SoftBody *b) noexcept nogil:
-    # How much stiffer than the base a loaded contact may become: in a
-    # chain, between bodies of alike mass (or against an immovable one) a
-    # lot; where a
-    # light body carries a heavy one the Gauss-Seidel passes no longer
-    # converge on a stiff contact and the pair starts to bounce, so little.
+cdef inline cpFloat SoftPreload(SoftBody *a, SoftBody *b, cpFloat *maxStiffening) noexcept nogil:
+    # The fraction of a point's load its spring holds at no depth. A soft
+    # contact settles where its bias balances the impulse it leaks, so under
+    # a load it sinks in proportion to the load: the bottom of a tall stack
+    # or pyramid, or a light body under a heavy one, far more than the top.
+    # The leak is taken from the impulse above the preload instead, so a
+    # point carrying its usual load sits at no depth, and the spring and its
+    # damping act on the change of load only (stiffness and damping are the
+    # base ones: a stiffness that follows the load pumps a tall stack's
+    # column into bouncing). Where the preload is not taken (large mass
+    # ratios) a loaded point may be stiffened instead: *maxStiffening.
     cdef cpFloat lo, hi
+    maxStiffening[0] = 1.0
     if (a.body != NULL and a.contacts > 2) or (b.body != NULL and b.contacts > 2):
-        # Not in a chain (a stack, an arch, a body on a body): in a web of
-        # contacts, a pyramid's, stiff contacts make Gauss-Seidel shake it
-        # apart (stiffness alone settles pyramids; a chain converges).
-        return 1.0
+        return SOFT_PRELOAD_WEB
     if a.m_inv == 0.0 or b.m_inv == 0.0:
-        return SOFT_MAX_STIFFENING
+        return SOFT_PRELOAD_CHAIN
     lo = fmin(a.m_inv, b.m_inv)
     hi = fmax(a.m_inv, b.m_inv)
-    return fmax(SOFT_MIN_STIFFENING_CAP, SOFT_MAX_STIFFENING * (lo / hi))
+    if lo * SOFT_PRELOAD_MAX_RATIO >= hi:
+        return SOFT_PRELOAD_CHAIN
+    maxStiffening[0] = SOFT_RATIO_STIFFENING
+    return 0.0
 
 cdef inline void SoftPointSoftness(SoftPoint *sp, SoftSoftness *base, cpFloat load,
                                    cpFloat size, cpFloat maxStiffening, cpFloat h) noexcept nogil:
     # A soft contact settles where its bias balances the impulse it leaks:
     # (compliance / normalMass) * impulse = biasRate * depth. Under a load F
     # (impulse F h per substep) it sinks compliance F h / (normalMass
-    # biasRate) deep, so the bottom of a tall stack or
-    # pyramid, or a light body under a heavy one, would sink far more than
-    # the top. A point whose (filtered) load would sink it deeper than
+    # biasRate) deep. Where it is not preloaded (SoftPreload), a point whose
+    # (filtered) load would sink it deeper than
     # SOFT_MAX_LOAD_DEFLECTION x `size` leaks less (a smaller compliance); its bias
     # rate, which sets how fast overlap is pushed out, stays. That is the
     # implicit spring-damper with stiffness and damping both scaled up by
@@ -830,8 +836,8 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
         return 0
     ctx.warmCoef = ctx.h / prev_dt if prev_dt != 0.0 else 0.0
     ctx.loadCoef = 1.0 / prev_dt if prev_dt != 0.0 else 0.0
-    # Each body's number of contacts: a contact is stiffened for its load
-    # only where both of its bodies have at most two (SoftMaxStiffening).
+    # Each body's number of contacts: a contact's load is
+    # fully preloaded only where both of its bodies have at most two (SoftPreload).
     # On the pool; an arbiter without contacts (only after a failed
     # allocation) makes it all be done again here, skipping those.
     tamias_store(&ctx.emptyArbiter, 0)
@@ -891,7 +897,7 @@ cdef void SoftPrepareContactRange(SoftContext *ctx, int begin, int end) noexcept
     cdef SoftBody *b
     cdef SoftSoftness soft
     cdef cpFloat nx, ny, rnA, rnB, rtA, rtB, kN, kT, sep, warm, size, load
-    cdef cpFloat maxStiffening, age, smoothing
+    cdef cpFloat maxStiffening, preloadFraction, age, smoothing
     cdef cpFloat warmCoef = ctx.warmCoef
     cdef cpFloat loadCoef = ctx.loadCoef
     cdef SoftState *sa
@@ -909,7 +915,7 @@ cdef void SoftPrepareContactRange(SoftContext *ctx, int begin, int end) noexcept
         sc.count = arb.count if arb.count <= 2 else 2
         sc.dst = arb.contacts
         size = SoftContactSize(arb)
-        maxStiffening = SoftMaxStiffening(a, b)
+        preloadFraction = SoftPreload(a, b, &maxStiffening)
         nx = arb.n.x
         ny = arb.n.y
         sc.nx = nx
@@ -964,6 +970,8 @@ cdef void SoftPrepareContactRange(SoftContext *ctx, int begin, int end) noexcept
                 load = 0.0
                 age = 0.0
             SoftPointSoftness(sp, &soft, load, size, maxStiffening, ctx.h)
+            # The load as a substep's impulse (jnAcc is the step's).
+            sp.preload = load * ctx.h * preloadFraction
             # Separation now, less the anchors' part, which the solver adds
             # back from the bodies' motion within the step.
             sep = ((sp.rBx - sp.rAx + arb.body_b.p.x - arb.body_a.p.x) * nx
@@ -1157,6 +1165,7 @@ cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, int k, int i) noexcept n
         ln.base[j][k] = sp.baseSeparation
         ln.biasRate[j][k] = sp.biasRate
         ln.compliance[j][k] = sp.compliance
+        ln.preload[j][k] = sp.preload
         ln.tangentMass[j][k] = sp.tangentMass
         ln.normalImpulse[j][k] = sp.normalImpulse
         ln.tangentImpulse[j][k] = sp.tangentImpulse
@@ -1231,6 +1240,7 @@ cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias) noex
     cdef cpFloat a11, a22, a12, x01, x02, q1, q2, det, x1, x2, d1, d2
     cdef cpFloat bias[2]
     cdef cpFloat gamma[2]      # a soft row's compliance (0: rigid)
+    cdef cpFloat held[2]       # the part of the warm start a soft row's preload holds
     a = &ctx.bodies[sc.ia]
     b = &ctx.bodies[sc.ib]
     sa = &ctx.states[sc.ia]
@@ -1261,23 +1271,27 @@ cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias) noex
             # Speculative: let the gap close within the substep, no push.
             bias[j] = s * inv_h
             gamma[j] = 0.0
+            held[j] = 0.0
         elif useBias:
             # Overlap is pushed out softly, at most at pushOut.
             bias[j] = sp.biasRate * s
             if bias[j] < -pushOut:
                 bias[j] = -pushOut
             gamma[j] = sp.compliance
+            held[j] = fmin(sp.normalImpulse, sp.preload)
         else:
             bias[j] = 0.0
             gamma[j] = 0.0
+            held[j] = 0.0
     if sc.block:
         # Both normal rows at once: the linear complementarity problem
         # w = A x + q, x >= 0, w >= 0, x.w = 0 for the accumulated
         # impulses x, with A = K + diag(k_ii gamma_i) and
-        # q = vn + bias - K x0. A soft row's added diagonal is the soft
-        # constraint written as a compliance: (k + k gamma) dx =
-        # -(vn + bias) - k gamma x0 is the sequential massScale /
-        # impulseScale update exactly. Cases in Box2D 2.x's order.
+        # q = vn + bias - K x0 - diag(k_ii gamma_i) held. A soft row's added
+        # diagonal is the soft constraint written as a compliance: (k + k
+        # gamma) dx = -(vn + bias) - k gamma (x0 - held) is the sequential
+        # massScale / impulseScale update exactly (with held 0). Cases in
+        # Box2D 2.x's order.
         p1 = &sc.p[0]
         p2 = &sc.p[1]
         lin = (vbx - vax) * nx + (vby - vay) * ny
@@ -1287,9 +1301,9 @@ cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias) noex
         a11 = sc.k11 * (1.0 + gamma[0])
         a22 = sc.k22 * (1.0 + gamma[1])
         q1 = (lin + wb * p1.rnB - wa * p1.rnA + bias[0]
-              - (sc.k11 * x01 + a12 * x02))
+              - (sc.k11 * x01 + a12 * x02) - sc.k11 * gamma[0] * held[0])
         q2 = (lin + wb * p2.rnB - wa * p2.rnA + bias[1]
-              - (a12 * x01 + sc.k22 * x02))
+              - (a12 * x01 + sc.k22 * x02) - sc.k22 * gamma[1] * held[1])
         det = a11 * a22 - a12 * a12
         x1 = (a12 * q2 - a22 * q1) / det
         x2 = (a12 * q1 - a11 * q2) / det
@@ -1327,9 +1341,9 @@ cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias) noex
     else:
         for j in range(sc.count):
             sp = &sc.p[j]
-            # (k + k gamma) dx = -(vn + bias) - k gamma x0, k = 1 / normalMass
+            # (k + k gamma) dx = -(vn + bias) - k gamma (x0 - held), k = 1 / normalMass
             vn = ((vbx - vax) * nx + (vby - vay) * ny) + wb * sp.rnB - wa * sp.rnA
-            imp = (-(sp.normalMass * (vn + bias[j]) + gamma[j] * sp.normalImpulse)
+            imp = (-(sp.normalMass * (vn + bias[j]) + gamma[j] * (sp.normalImpulse - held[j]))
                    / (1.0 + gamma[j]))
             newImp = sp.normalImpulse + imp
             if newImp < 0.0:
