@@ -68,13 +68,17 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
             V s = (ddx + (prBx - prAx)) * nx + (ddy + (prBy - prAy)) * ny + L(c->base[j]);
             M spec = V_GT(s, zero);
             if (useBias) {
-                V b = L(c->biasRate[j]) * s;
-                b = V_SEL(V_LT(b, negPush), negPush, b);
-                bias[j] = V_SEL(spec, s * inv_h, b);
-                gamma[j] = V_SEL(spec, zero, L(c->compliance[j]));
-                /* The part of the warm start the preload holds at no depth. */
+                /* The part of the warm start the preload holds at no depth;
+                 * the push-out cap applies beyond what holds the rest. */
                 V x0 = L(c->normalImpulse[j]), pre = L(c->preload[j]);
+                V g = L(c->compliance[j]);
+                V b = L(c->biasRate[j]) * s;
+                V lim;
                 held[j] = V_SEL(V_LT(x0, pre), x0, pre);
+                lim = negPush - L(j == 0 ? c->k11 : c->k22) * g * (x0 - held[j]);
+                b = V_SEL(V_LT(b, lim), lim, b);
+                bias[j] = V_SEL(spec, s * inv_h, b);
+                gamma[j] = V_SEL(spec, zero, g);
             } else {
                 bias[j] = V_SEL(spec, s * inv_h, zero);
                 gamma[j] = zero;

@@ -1241,6 +1241,7 @@ cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias) noex
     cdef cpFloat bias[2]
     cdef cpFloat gamma[2]      # a soft row's compliance (0: rigid)
     cdef cpFloat held[2]       # the part of the warm start a soft row's preload holds
+    cdef cpFloat rowK, limit
     a = &ctx.bodies[sc.ia]
     b = &ctx.bodies[sc.ib]
     sa = &ctx.states[sc.ia]
@@ -1273,12 +1274,16 @@ cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias) noex
             gamma[j] = 0.0
             held[j] = 0.0
         elif useBias:
-            # Overlap is pushed out softly, at most at pushOut.
-            bias[j] = sp.biasRate * s
-            if bias[j] < -pushOut:
-                bias[j] = -pushOut
+            # Overlap is pushed out softly, at most at pushOut beyond the
+            # bias that holds the load the preload does not (the leak).
             gamma[j] = sp.compliance
             held[j] = fmin(sp.normalImpulse, sp.preload)
+            bias[j] = sp.biasRate * s
+            rowK = (sc.k11 if j == 0 else sc.k22) if sc.block else (
+                1.0 / sp.normalMass if sp.normalMass > 0.0 else 0.0)
+            limit = -pushOut - rowK * gamma[j] * (sp.normalImpulse - held[j])
+            if bias[j] < limit:
+                bias[j] = limit
         else:
             bias[j] = 0.0
             gamma[j] = 0.0
