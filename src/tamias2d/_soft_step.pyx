@@ -13,8 +13,9 @@ separation), without running the narrow phase again.
 Scene meaning is Chipmunk's: friction and elasticity multiply, surface
 velocity, handlers and sleeping are the shared stages of ``_space_step``.
 collision_slop is the scene's unit of length here (speculative distance and
-push-out speed follow it); overlap is pushed out softly down to the depth at
-which a contact carries its load, as in Box2D, not left alone up to the slop.
+push-out speed follow it); overlap is pushed out softly, as in Box2D, not left
+alone up to the slop, down to the depth at which a contact carries the part of
+its load that is not preloaded (SoftPreload).
 
 Beyond Box2D's soft step (docs/stability.md measures each):
   * a two-point manifold's normal rows are solved together (SoftSolve),
