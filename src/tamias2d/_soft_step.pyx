@@ -1000,8 +1000,13 @@ cdef void SoftPrepareContactRange(SoftContext *ctx, int begin, int end) noexcept
                     else -1)
 
 # Above this condition number the two normal rows are nearly dependent (the
-# points almost coincide) and are solved one after the other instead.
-cdef const cpFloat SOFT_BLOCK_MAX_CONDITION = 1000.0
+# points almost coincide) and are solved as one row at their midpoint
+# instead (SoftSolveContact). Box2D 2.x's 1000 is for float32; in double
+# precision the 2x2 solve keeps about 8 digits at 1e8. With 1000 the two
+# corners of a 1000-gon's bottom edge (0.13 apart under a radius of 20, a
+# condition of 12,500) were solved one after the other: the first took the
+# whole load, off the centre, and the polygon rolled away from rest.
+cdef const cpFloat SOFT_BLOCK_MAX_CONDITION = 1e8
 
 cdef inline void SoftPrepareBlock(SoftContact *sc, SoftBody *a, SoftBody *b) noexcept nogil:
     # The 2x2 normal mass matrix. Solving both points of a manifold at once
@@ -1242,7 +1247,8 @@ cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias) noex
     cdef cpFloat bias[2]
     cdef cpFloat gamma[2]      # a soft row's compliance (0: rigid)
     cdef cpFloat held[2]       # the part of the warm start a soft row's preload holds
-    cdef cpFloat rowK, limit
+    cdef cpFloat rowK, limit, rnA, rnB, kN
+    cdef int apart = 0         # rows whose points are apart (speculative)
     a = &ctx.bodies[sc.ia]
     b = &ctx.bodies[sc.ib]
     sa = &ctx.states[sc.ia]
@@ -1274,6 +1280,7 @@ cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias) noex
             bias[j] = s * inv_h
             gamma[j] = 0.0
             held[j] = 0.0
+            apart += 1
         elif useBias:
             # Overlap is pushed out softly, at most at pushOut beyond the
             # bias that holds the load the preload does not (the leak).
@@ -1344,6 +1351,40 @@ cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias) noex
         vbx += mB * imp * nx
         vby += mB * imp * ny
         wb += iB * (p1.rnB * d1 + p2.rnB * d2)
+    elif sc.count == 2 and apart == 0:
+        # Two touching points too close for the block solve (the rows
+        # nearly the same): one row at their midpoint, its impulse shared
+        # equally. One after the other, the first point would take the
+        # whole load wherever it is, and a load off the centre turns the
+        # body: a many-sided polygon rolls from rest on it and speeds up.
+        # (Where one point is apart, the other alone touches: the rows stay
+        # separate.)
+        p1 = &sc.p[0]
+        p2 = &sc.p[1]
+        rnA = 0.5 * (p1.rnA + p2.rnA)
+        rnB = 0.5 * (p1.rnB + p2.rnB)
+        kN = mA + mB + iA * rnA * rnA + iB * rnB * rnB
+        x01 = p1.normalImpulse + p2.normalImpulse
+        vn = ((vbx - vax) * nx + (vby - vay) * ny) + wb * rnB - wa * rnA
+        q1 = 0.5 * (bias[0] + bias[1])
+        a11 = 0.5 * (gamma[0] + gamma[1])
+        imp = (-(vn + q1) / kN - a11 * (x01 - held[0] - held[1])) / (1.0 + a11) if kN > 0.0 else 0.0
+        newImp = x01 + imp
+        if newImp < 0.0:
+            newImp = 0.0
+        imp = newImp - x01
+        p1.normalImpulse = 0.5 * newImp
+        p2.normalImpulse = 0.5 * newImp
+        if p1.normalImpulse > p1.maxNormalImpulse:
+            p1.maxNormalImpulse = p1.normalImpulse
+        if p2.normalImpulse > p2.maxNormalImpulse:
+            p2.maxNormalImpulse = p2.normalImpulse
+        vax -= mA * imp * nx
+        vay -= mA * imp * ny
+        wa -= iA * imp * rnA
+        vbx += mB * imp * nx
+        vby += mB * imp * ny
+        wb += iB * imp * rnB
     else:
         for j in range(sc.count):
             sp = &sc.p[j]
