@@ -837,8 +837,8 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
         return 0
     ctx.warmCoef = ctx.h / prev_dt if prev_dt != 0.0 else 0.0
     ctx.loadCoef = 1.0 / prev_dt if prev_dt != 0.0 else 0.0
-    # Each body's number of contacts: a contact's load is
-    # fully preloaded only where both of its bodies have at most two (SoftPreload).
+    # Each body's number of contacts: a contact's load is fully preloaded
+    # only where both of its bodies have at most two (SoftPreload).
     # On the pool; an arbiter without contacts (only after a failed
     # allocation) makes it all be done again here, skipping those.
     tamias_store(&ctx.emptyArbiter, 0)
@@ -1247,7 +1247,7 @@ cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias) noex
     cdef cpFloat bias[2]
     cdef cpFloat gamma[2]      # a soft row's compliance (0: rigid)
     cdef cpFloat held[2]       # the part of the warm start a soft row's preload holds
-    cdef cpFloat rowK, limit, rnA, rnB, kN
+    cdef cpFloat rowK, limit, rnA, rnB, kN, meanBias, meanGamma
     cdef int apart = 0         # rows whose points are apart (speculative)
     a = &ctx.bodies[sc.ia]
     b = &ctx.bodies[sc.ib]
@@ -1366,9 +1366,10 @@ cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias) noex
         kN = mA + mB + iA * rnA * rnA + iB * rnB * rnB
         x01 = p1.normalImpulse + p2.normalImpulse
         vn = ((vbx - vax) * nx + (vby - vay) * ny) + wb * rnB - wa * rnA
-        q1 = 0.5 * (bias[0] + bias[1])
-        a11 = 0.5 * (gamma[0] + gamma[1])
-        imp = (-(vn + q1) / kN - a11 * (x01 - held[0] - held[1])) / (1.0 + a11) if kN > 0.0 else 0.0
+        meanBias = 0.5 * (bias[0] + bias[1])
+        meanGamma = 0.5 * (gamma[0] + gamma[1])
+        imp = ((-(vn + meanBias) / kN - meanGamma * (x01 - held[0] - held[1])) / (1.0 + meanGamma)
+               if kN > 0.0 else 0.0)
         newImp = x01 + imp
         if newImp < 0.0:
             newImp = 0.0
