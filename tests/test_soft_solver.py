@@ -78,6 +78,56 @@ def test_constant_torque_is_semi_implicit_euler():
     assert b.torque == 0.0
 
 
+
+def test_velocity_func_sees_each_substeps_position():
+    # The substeps keep default bodies' positions in the solver's arrays and
+    # write them to the bodies when the step ends; a velocity_func may read
+    # any body's position (as in the chipmunk solver, where each body's is
+    # current when it is integrated), so with one in the space every substep
+    # writes them.
+    s = soft_space(substeps=4)
+    s.gravity = 0.0, -10.0
+    seen = []
+    probe = tamias2d.Body(1.0, 1.0)
+    probe.velocity = 5.0, 0.0
+    other = tamias2d.Body(1.0, 1.0)
+    other.position = 0.0, 100.0
+    other.velocity = 3.0, 0.0
+    def record(body, gravity, damping, dt):
+        seen.append((probe.position.x, other.position.x))
+        tamias2d.Body.update_velocity(body, gravity, damping, dt)
+    probe.velocity_func = record
+    s.add(probe, tamias2d.Circle(probe, 1.0), other, tamias2d.Circle(other, 1.0))
+    s.step(DT)
+    h = DT / 4
+    expected = [(0.0, 0.0)]
+    for _ in range(4):
+        expected.append((expected[-1][0] + 5.0 * h, expected[-1][1] + 3.0 * h))
+    assert seen == expected[:4]
+    assert (probe.position.x, other.position.x) == expected[4]
+
+
+def test_a_joint_pre_solve_force_acts_in_the_same_step():
+    # Forces are read once per step for the substeps; a joint's pre_solve
+    # callback runs after that and may push a body: it still counts.
+    s = soft_space(substeps=4)
+    a = tamias2d.Body(1.0, 1.0)
+    b = tamias2d.Body(2.0, 1.0)
+    b.position = 10.0, 0.0
+    free = tamias2d.Body(1.0, 1.0)
+    free.position = 0.0, 50.0
+    joint = tamias2d.PinJoint(a, b)
+    joint.pre_solve = lambda constraint, space: free.apply_force_at_local_point((6.0, 0.0))
+    s.add(a, b, free, tamias2d.Circle(free, 1.0), joint)
+    s.step(DT)
+    v = x = 0.0
+    h = DT / 4
+    for _ in range(4):
+        v = v * 1.0 + (0.0 + 6.0 * 1.0) * h
+        x = x + v * h
+    assert (free.velocity.x, free.position.x) == (v, x)
+
+
 def _head_on(e):
     s = soft_space()
     bodies = []

@@ -27,6 +27,16 @@
 
 #define SOFT_LANES 4
 
+/* The kernels' bodies are inlined into their range loops whatever the
+ * optimiser would choose, so that the flags become constants there. */
+#if defined(__GNUC__) || defined(__clang__)
+#define SOFT_ALWAYS_INLINE inline __attribute__((always_inline))
+#elif defined(_MSC_VER)
+#define SOFT_ALWAYS_INLINE __forceinline
+#else
+#define SOFT_ALWAYS_INLINE inline
+#endif
+
 /* The solver state of one body (Box2D's b2BodyState): velocity and the
  * motion since the step began. Slot 0 is the immovable body (all zero,
  * qc = 1). */
@@ -359,25 +369,34 @@ static inline int SoftLanesSetPath(int path) {
     return 1;
 }
 
-static inline void SoftLanesWarmStart(SoftLanes *c, SoftState *st) {
+/* The kernels over n lanes from c. */
+static inline void SoftLanesWarmStart(SoftLanes *c, int n, SoftState *st) {
 #if SOFT_HAVE_AVX2
-    if (soft_lanes_path == SOFT_PATH_AVX2) { soft_warm_start_avx2(c, st); return; }
+    if (soft_lanes_path == SOFT_PATH_AVX2) { soft_warm_start_range_avx2(c, n, st); return; }
 #endif
 #if SOFT_HAVE_SIMD
-    if (soft_lanes_path == SOFT_PATH_SIMD) { soft_warm_start_simd(c, st); return; }
+    if (soft_lanes_path == SOFT_PATH_SIMD) { soft_warm_start_range_simd(c, n, st); return; }
 #endif
-    soft_warm_start_scalar(c, st);
+    soft_warm_start_range_scalar(c, n, st);
 }
 
 /* accumulate (relax passes only): add the lane's impulses to its step
- * totals after solving it, as the substep's last pass does. */
-static inline void SoftLanesSolve(SoftLanes *c, SoftState *st, double inv_h, double pushOut,
-                                  int useBias, int accumulate) {
+ * totals after solving it, as the substep's last pass does; trackMax: keep
+ * the points' largest normal impulses (for restitution). */
+static inline void SoftLanesSolve(SoftLanes *c, int n, SoftState *st, double inv_h, double pushOut,
+                                  int useBias, int accumulate, int trackMax) {
 #if SOFT_HAVE_AVX2
-    if (soft_lanes_path == SOFT_PATH_AVX2) { soft_solve_avx2(c, st, inv_h, pushOut, useBias, accumulate); return; }
+    if (soft_lanes_path == SOFT_PATH_AVX2) {
+        soft_solve_range_avx2(c, n, st, inv_h, pushOut, useBias, accumulate, trackMax);
+        return;
+    }
 #endif
 #if SOFT_HAVE_SIMD
-    if (soft_lanes_path == SOFT_PATH_SIMD) { soft_solve_simd(c, st, inv_h, pushOut, useBias, accumulate); return; }
+    if (soft_lanes_path == SOFT_PATH_SIMD) {
+        soft_solve_range_simd(c, n, st, inv_h, pushOut, useBias, accumulate, trackMax);
+        return;
+    }
 #endif
-    soft_solve_scalar(c, st, inv_h, pushOut, useBias, accumulate);
+    soft_solve_range_scalar(c, n, st, inv_h, pushOut, useBias, accumulate, trackMax);
 }
+

@@ -12,7 +12,7 @@
 #define G(idx, member) soft_v_gather(st, (idx), k, offsetof(SoftState, member))
 #define P(idx, w, member, value) soft_v_scatter(st, (idx), (w), k, offsetof(SoftState, member), (value))
 
-static inline void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftState *st) {
+static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftState *st) {
     int k, j;
     LOOP_LANES(k) {
         V mA = L(c->mA), iA = L(c->iA), mB = L(c->mB), iB = L(c->iB);
@@ -39,8 +39,11 @@ static inline void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftState *st) {
     }
 }
 
-static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double inv_h_s,
-                                           double pushOut_s, int useBias, int accumulate) {
+/* trackMax: keep each point's largest normal impulse of the step (only
+ * restitution reads it, so a step without elastic contacts skips it). */
+static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double inv_h_s,
+                                                       double pushOut_s, int useBias, int accumulate,
+                                                       int trackMax) {
     int k, j;
     V zero = soft_v_splat(0.0), one = soft_v_splat(1.0);
     V inv_h = soft_v_splat(inv_h_s), negPush = soft_v_splat(-pushOut_s);
@@ -95,8 +98,10 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
             n1 = x01 - (q1 + k11 * gamma[0] * (x01 - held[0])) / (k11 * (one + gamma[0]));
             n1 = V_SEL(V_LT(n1, zero), zero, n1);
             S(c->normalImpulse[0], n1);
-            m1 = L(c->maxNormalImpulse[0]);
-            S(c->maxNormalImpulse[0], V_SEL(V_GT(n1, m1), n1, m1));
+            if (trackMax) {
+                m1 = L(c->maxNormalImpulse[0]);
+                S(c->maxNormalImpulse[0], V_SEL(V_GT(n1, m1), n1, m1));
+            }
             d1 = n1 - x01;
             vax = vax - mA * (d1 * nx);
             vay = vay - mA * (d1 * ny);
@@ -133,7 +138,7 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
         d2 = n2 - x02;
         S(c->normalImpulse[0], n1);
         S(c->normalImpulse[1], n2);
-        {
+        if (trackMax) {
             V m1 = L(c->maxNormalImpulse[0]), m2 = L(c->maxNormalImpulse[1]);
             S(c->maxNormalImpulse[0], V_SEL(V_GT(n1, m1), n1, m1));
             S(c->maxNormalImpulse[1], V_SEL(V_GT(n2, m2), n2, m2));
@@ -181,6 +186,33 @@ static inline void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double i
         soft_v_scatter_velocity(st, c->ib, c->wb, k, vbx, vby, wb);
     }
 }
+
+/* The kernels over a range of lanes, each case of the flags its own loop
+ * (the flags are constants inside, so the compiler drops what a pass does
+ * not do; the arithmetic that stays is the same, so are the bits). */
+static void SOFT_KERNEL(soft_warm_start_range)(SoftLanes *c, int n, SoftState *st) {
+    int i;
+    for (i = 0; i < n; i++)
+        SOFT_KERNEL(soft_warm_start)(&c[i], st);
+}
+
+#define SOFT_SOLVE_LOOP(bias, acc, track) \
+    for (i = 0; i < n; i++) \
+        SOFT_KERNEL(soft_solve)(&c[i], st, inv_h, pushOut, (bias), (acc), (track))
+
+static void SOFT_KERNEL(soft_solve_range)(SoftLanes *c, int n, SoftState *st, double inv_h,
+                                          double pushOut, int useBias, int accumulate,
+                                          int trackMax) {
+    int i;
+    if (useBias) {
+        if (trackMax) SOFT_SOLVE_LOOP(1, 0, 1); else SOFT_SOLVE_LOOP(1, 0, 0);
+    } else if (accumulate) {
+        if (trackMax) SOFT_SOLVE_LOOP(0, 1, 1); else SOFT_SOLVE_LOOP(0, 1, 0);
+    } else {
+        if (trackMax) SOFT_SOLVE_LOOP(0, 0, 1); else SOFT_SOLVE_LOOP(0, 0, 0);
+    }
+}
+#undef SOFT_SOLVE_LOOP
 
 #undef L
 #undef S

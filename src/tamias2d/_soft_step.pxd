@@ -149,9 +149,10 @@ cdef extern from "_soft_lanes.h" nogil:
         cpFloat totalNormal[2][SOFT_LANES]
         cpFloat totalTangent[2][SOFT_LANES]
     void SoftLanesClear(SoftLanes *c, int k)
-    void SoftLanesWarmStart(SoftLanes *c, SoftState *st)
-    void SoftLanesSolve(SoftLanes *c, SoftState *st, cpFloat inv_h, cpFloat pushOut, int useBias,
-                        int accumulate)
+    # n lanes from c (trackMax: keep maxNormalImpulse, which only restitution reads)
+    void SoftLanesWarmStart(SoftLanes *c, int n, SoftState *st)
+    void SoftLanesSolve(SoftLanes *c, int n, SoftState *st, cpFloat inv_h, cpFloat pushOut,
+                        int useBias, int accumulate, int trackMax)
     enum: SOFT_PATH_SCALAR, SOFT_PATH_SIMD, SOFT_PATH_AVX2
     void SoftLanesInit()
     int SoftLanesPathAvailable(int path)
@@ -166,6 +167,16 @@ cdef struct SoftBody:
     cpBody *body
     int flags
     int contacts              # arbiters touching it this step (SoftPrepareContacts)
+
+# What integrating a body with the default velocity and position functions
+# needs beside its SoftState (same slot): the step's acceleration (gravity
+# plus the force, and the torque, over the mass: constant over the
+# substeps) and its position, kept here and written to the cpBody when the
+# step ends (or every substep where a joint or a velocity_func reads it),
+# so the substeps do not touch the cpBody structs.
+cdef struct SoftMotion:
+    cpFloat ax, ay, alpha
+    cpFloat px, py, a
 
 # One contact point: anchors from the centres of gravity (fixed for the
 # step), the separation with the anchors' offset removed (Box2D's adjusted

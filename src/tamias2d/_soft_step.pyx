@@ -138,6 +138,7 @@ cdef enum:
     SOFT_SCRATCH_TOUCHING     # each pair's narrow phase found contacts
     SOFT_SCRATCH_KEYS         # what the colouring reads of each contact (SoftColorKey)
     SOFT_SCRATCH_THREADED     # last step's arbiters, still threaded (SoftResetArbiters)
+    SOFT_SCRATCH_MOTION       # SoftMotion of each body slot
     SOFT_SCRATCH_COUNT
 
 # (cpSoftScratch holds 16 buffers.)
@@ -193,6 +194,8 @@ cdef struct SoftContext:
     cpSpace *space
     SoftBody *bodies
     SoftState *states         # the bodies' solver state, same slots
+    SoftMotion *motion        # their accelerations and positions, same slots
+    bint livePositions        # every body's position and transform written each substep (a Python velocity_func may read them)
     int bodyCount             # slots, the immovable slot 0 included
     SoftContact *contacts
     int contactCount
@@ -588,7 +591,8 @@ cdef bint SoftGatherBodies(SoftContext *ctx) noexcept nogil:
     cdef SoftBody *sb
     ctx.bodies = <SoftBody *>_reserve(space, SOFT_SCRATCH_BODIES, n, sizeof(SoftBody))
     ctx.states = <SoftState *>_reserve(space, SOFT_SCRATCH_STATES, n, sizeof(SoftState))
-    if ctx.bodies == NULL or ctx.states == NULL:
+    ctx.motion = <SoftMotion *>_reserve(space, SOFT_SCRATCH_MOTION, n, sizeof(SoftMotion))
+    if ctx.bodies == NULL or ctx.states == NULL or ctx.motion == NULL:
         return 0
     ctx.bodyCount = n
     memset(&ctx.states[0], 0, sizeof(SoftState))
@@ -603,17 +607,29 @@ cdef bint SoftGatherBodies(SoftContext *ctx) noexcept nogil:
     SoftRun(ctx, SOFT_TASK_GATHER, 1, n, 0)
     ctx.serialVelocities = tamias_load(&ctx.customVelocity) != 0
     ctx.serialPositions = tamias_load(&ctx.customPosition) != 0
+    ctx.livePositions = ctx.serialVelocities
     return 1
+
+cdef inline void SoftGatherMotion(SoftContext *ctx, int i, const cpBody *body) noexcept nogil:
+    cdef SoftMotion *mo = &ctx.motion[i]
+    mo.ax = ctx.gx + body.f.x * body.m_inv
+    mo.ay = ctx.gy + body.f.y * body.m_inv
+    mo.alpha = body.t * body.i_inv
+    mo.px = body.p.x
+    mo.py = body.p.y
+    mo.a = body.a
 
 cdef void SoftGatherRange(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef cpArray *arr = ctx.space.dynamicBodies
     cdef int i
     cdef SoftBody *sb
     cdef SoftState *st
+    cdef SoftMotion *mo
     cdef cpBody *body
     for i in range(begin, end):
         body = <cpBody *>arr.arr[i - 1]
         body.solverIndex = i
+        SoftGatherMotion(ctx, i, body)
         st = &ctx.states[i]
         st.vx = body.v.x
         st.vy = body.v.y
@@ -655,6 +671,7 @@ cdef bint SoftPrepareJoints(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     cdef int i, k, slot
     cdef cpBody *ends[2]
     cdef cpFloat coef = ctx.h / prev_dt if prev_dt != 0.0 else 0.0
+    cdef bint called = 0
     ctx.jointBodyCount = 0
     ctx.jointBodies = NULL
     if constraints.num == 0:
@@ -667,6 +684,7 @@ cdef bint SoftPrepareJoints(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
         c = <cpConstraint *>constraints.arr[i]
         if c.preSolve != NULL:
             c.preSolve(c, space)
+            called = 1
         # Between steps the accumulated impulse is per step (as the chipmunk
         # solver keeps it); inside this step it is per substep.
         tamias_constraint_scale_impulse(c, coef)
@@ -678,6 +696,10 @@ cdef bint SoftPrepareJoints(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
                 ctx.bodies[slot].flags |= SOFT_BODY_JOINTED
                 ctx.jointBodies[ctx.jointBodyCount] = slot
                 ctx.jointBodyCount += 1
+    if called:
+        # A pre-solve callback may have pushed or moved a body.
+        for i in range(1, ctx.bodyCount):
+            SoftGatherMotion(ctx, i, ctx.bodies[i].body)
     return 1
 
 cdef inline void SoftScatterJointBodies(SoftContext *ctx) noexcept nogil:
@@ -1600,6 +1622,7 @@ cdef void SoftIntegrateVelocities(SoftContext *ctx, int begin, int end, bint las
     cdef int i
     cdef SoftBody *sb
     cdef SoftState *st
+    cdef SoftMotion *mo
     cdef cpBody *body
     cdef cpFloat damping = ctx.damping
     cdef cpFloat h = ctx.h
@@ -1608,16 +1631,17 @@ cdef void SoftIntegrateVelocities(SoftContext *ctx, int begin, int end, bint las
     for i in range(begin, end):
         sb = &ctx.bodies[i]
         st = &ctx.states[i]
-        body = sb.body
         if sb.flags & SOFT_BODY_DEFAULT_VELOCITY:
             if sb.flags & SOFT_BODY_KINEMATIC:
                 continue
             # cpBodyUpdateVelocity's arithmetic; the force applies in every
             # substep and is cleared when the step ends.
-            st.vx = st.vx * damping + (ctx.gx + body.f.x * sb.m_inv) * h
-            st.vy = st.vy * damping + (ctx.gy + body.f.y * sb.m_inv) * h
-            st.w = st.w * damping + body.t * sb.i_inv * h
+            mo = &ctx.motion[i]
+            st.vx = st.vx * damping + mo.ax * h
+            st.vy = st.vy * damping + mo.ay * h
+            st.w = st.w * damping + mo.alpha * h
         else:
+            body = sb.body
             body.v.x = st.vx
             body.v.y = st.vy
             body.w = st.w
@@ -1637,6 +1661,7 @@ cdef void SoftIntegratePositions(SoftContext *ctx, int begin, int end) noexcept 
     cdef int i
     cdef SoftBody *sb
     cdef SoftState *st
+    cdef SoftMotion *mo
     cdef cpBody *body
     cdef cpFloat h = ctx.h
     cdef cpFloat dx, dy, da, qc, qs, mag, px0, py0, a0
@@ -1648,9 +1673,18 @@ cdef void SoftIntegratePositions(SoftContext *ctx, int begin, int end) noexcept 
             dx = st.vx * h
             dy = st.vy * h
             da = st.w * h
-            body.p.x = body.p.x + dx
-            body.p.y = body.p.y + dy
-            body.a = body.a + da
+            mo = &ctx.motion[i]
+            mo.px = mo.px + dx
+            mo.py = mo.py + dy
+            mo.a = mo.a + da
+            if ctx.livePositions or (sb.flags & SOFT_BODY_JOINTED):
+                body.p.x = mo.px
+                body.p.y = mo.py
+                body.a = mo.a
+                if ctx.livePositions and not (sb.flags & SOFT_BODY_JOINTED):
+                    # As cpBodyUpdatePosition: Body.position is read from the
+                    # transform (jointed bodies get theirs below).
+                    SoftSetTransform(body)
         else:
             body.v.x = st.vx
             body.v.y = st.vy
@@ -1688,6 +1722,10 @@ cdef void SoftFinishBodies(SoftContext *ctx, int begin, int end) noexcept nogil:
         sb = &ctx.bodies[i]
         st = &ctx.states[i]
         body = sb.body
+        if sb.flags & SOFT_BODY_DEFAULT_POSITION:
+            body.p.x = ctx.motion[i].px
+            body.p.y = ctx.motion[i].py
+            body.a = ctx.motion[i].a
         body.v.x = st.vx
         body.v.y = st.vy
         body.w = st.w
@@ -1762,14 +1800,13 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
     elif task == SOFT_TASK_INTEGRATE_POSITIONS:
         SoftIntegratePositions(ctx, begin, end)
     elif task == SOFT_TASK_WARM_START:
-        for i in range(begin, end):
-            SoftLanesWarmStart(&ctx.lanes[i], ctx.states)
+        SoftLanesWarmStart(&ctx.lanes[begin], end - begin, ctx.states)
     elif task == SOFT_TASK_SOLVE:
-        for i in range(begin, end):
-            SoftLanesSolve(&ctx.lanes[i], ctx.states, ctx.inv_h, ctx.pushOut, flag, 0)
+        SoftLanesSolve(&ctx.lanes[begin], end - begin, ctx.states, ctx.inv_h, ctx.pushOut, flag, 0,
+                       tamias_load(&ctx.elastic) != 0)
     elif task == SOFT_TASK_RELAX_ACCUMULATE:
-        for i in range(begin, end):
-            SoftLanesSolve(&ctx.lanes[i], ctx.states, ctx.inv_h, ctx.pushOut, 0, 1)
+        SoftLanesSolve(&ctx.lanes[begin], end - begin, ctx.states, ctx.inv_h, ctx.pushOut, 0, 1,
+                       tamias_load(&ctx.elastic) != 0)
     elif task == SOFT_TASK_PREPARE:
         SoftPrepareContactRange(ctx, begin, end)
     elif task == SOFT_TASK_NARROW:
