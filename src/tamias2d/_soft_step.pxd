@@ -14,7 +14,8 @@
 #                           broad phase's order
 #   SoftRethreadArbiters    unthread last step's arbiters if this step's differ
 #   cpSpaceProcessComponents, StageFilterArbiterCache       (shared)
-#   SoftGatherBodies        * awake bodies into SoftBody / SoftState arrays
+#   SoftGatherBodies        * awake bodies into SoftBody / SoftState / SoftMotion
+#                           arrays (velocity; acceleration and position)
 #   SoftPrepareJoints       joint pre-solve callbacks, warm-start rescale
 #   SoftPrepareContacts     * each body's contact count; * arbiters into a
 #                           contiguous SoftContact array;
@@ -31,7 +32,8 @@
 #                              the last adds the impulses to the step's totals
 #   * SoftUnpackLanes, SoftApplyRestitution, * SoftStoreImpulses (without
 #   restitution: * SoftUnpackLanes straight into the arbiters),
-#   * SoftFinishBodies, SoftFinishJoints
+#   * SoftFinishBodies (velocities, positions, transforms to the cpBodies),
+#   SoftFinishJoints
 #   StagePostSolve, unlock (post-step callbacks)            (shared)
 from tamias2d._config cimport cpFloat, cpBool
 from tamias2d._structs cimport (cpSpace, cpBody, cpArbiter, cpContact, cpSoftSettings, cpSoftScratch,
