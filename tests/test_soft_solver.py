@@ -107,6 +107,28 @@ def test_velocity_func_sees_each_substeps_position():
     assert (probe.position.x, other.position.x) == expected[4]
 
 
+
+def test_a_velocity_func_pushing_another_body_acts_in_the_same_substep():
+    # With a Python velocity_func in the space, each body's force is read
+    # again every substep (as Munk2D's cpBodyUpdateVelocity reads it): one
+    # integrated earlier in the body order may have pushed it.
+    s = soft_space(substeps=4)
+    pusher = tamias2d.Body(1.0, 1.0)
+    pushed = tamias2d.Body(1.0, 1.0)
+    pushed.position = 0.0, 100.0
+    def push(body, gravity, damping, dt):
+        pushed.force = 6.0, 0.0
+        tamias2d.Body.update_velocity(body, gravity, damping, dt)
+    pusher.velocity_func = push
+    s.add(pusher, tamias2d.Circle(pusher, 1.0), pushed, tamias2d.Circle(pushed, 1.0))
+    s.step(DT)
+    v = x = 0.0
+    h = DT / 4
+    for _ in range(4):
+        v = v * 1.0 + (0.0 + 6.0 * 1.0) * h
+        x = x + v * h
+    assert (pushed.velocity.x, pushed.position.x) == (v, x)
+
 def test_a_joint_pre_solve_force_acts_in_the_same_step():
     # Forces are read once per step for the substeps; a joint's pre_solve
     # callback runs after that and may push a body: it still counts.

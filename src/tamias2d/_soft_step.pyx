@@ -624,7 +624,6 @@ cdef void SoftGatherRange(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef int i
     cdef SoftBody *sb
     cdef SoftState *st
-    cdef SoftMotion *mo
     cdef cpBody *body
     for i in range(begin, end):
         body = <cpBody *>arr.arr[i - 1]
@@ -1637,6 +1636,9 @@ cdef void SoftIntegrateVelocities(SoftContext *ctx, int begin, int end, bint las
             # cpBodyUpdateVelocity's arithmetic; the force applies in every
             # substep and is cleared when the step ends.
             mo = &ctx.motion[i]
+            if ctx.livePositions:
+                # A Python velocity_func may have pushed this body since.
+                SoftGatherMotion(ctx, i, sb.body)
             st.vx = st.vx * damping + mo.ax * h
             st.vy = st.vy * damping + mo.ay * h
             st.w = st.w * damping + mo.alpha * h
