@@ -62,7 +62,6 @@ typedef struct {
     double friction[SOFT_LANES], surfaceT[SOFT_LANES];
     double k11[SOFT_LANES], k12[SOFT_LANES], k22[SOFT_LANES];
     double rAx[2][SOFT_LANES], rAy[2][SOFT_LANES], rBx[2][SOFT_LANES], rBy[2][SOFT_LANES];
-    double rnA[2][SOFT_LANES], rnB[2][SOFT_LANES], rtA[2][SOFT_LANES], rtB[2][SOFT_LANES];
     double base[2][SOFT_LANES];           /* adjusted separation */
     double biasRate[2][SOFT_LANES], compliance[2][SOFT_LANES], preload[2][SOFT_LANES];
     double tangentMass[2][SOFT_LANES];
@@ -89,7 +88,6 @@ static inline void SoftLanesClear(SoftLanes *c, int k) {
     c->k11[k] = 1.0; c->k12[k] = 0.0; c->k22[k] = 1.0;
     for (p = 0; p < 2; p++) {
         c->rAx[p][k] = c->rAy[p][k] = c->rBx[p][k] = c->rBy[p][k] = 0.0;
-        c->rnA[p][k] = c->rnB[p][k] = c->rtA[p][k] = c->rtB[p][k] = 0.0;
         c->base[p][k] = SOFT_LANE_FAR;
         c->biasRate[p][k] = c->compliance[p][k] = c->preload[p][k] = 0.0;
         c->tangentMass[p][k] = 0.0;

@@ -11,6 +11,11 @@
 #define S(field, value) soft_v_store((field), k, (value))
 #define G(idx, member) soft_v_gather(st, (idx), k, offsetof(SoftState, member))
 #define P(idx, w, member, value) soft_v_scatter(st, (idx), (w), k, offsetof(SoftState, member), (value))
+/* The arms' cross products with the normal and the tangent, worked out from
+ * the anchors as the contacts' preparation does (the same expressions, so
+ * the same bits) rather than stored: a quarter fewer bytes per lane. */
+#define RN(rx, ry) ((rx) * ny - (ry) * nx)
+#define RT(rx, ry) ((rx) * nx + (ry) * ny)
 
 static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftState *st) {
     int k, j;
@@ -29,10 +34,11 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftSt
             V py = xn * ny + xt * nx;
             vax = vax - mA * px;
             vay = vay - mA * py;
-            wa = wa - iA * (xn * L(c->rnA[j]) + xt * L(c->rtA[j]));
+            V rAx = L(c->rAx[j]), rAy = L(c->rAy[j]), rBx = L(c->rBx[j]), rBy = L(c->rBy[j]);
+            wa = wa - iA * (xn * RN(rAx, rAy) + xt * RT(rAx, rAy));
             vbx = vbx + mB * px;
             vby = vby + mB * py;
-            wb = wb + iB * (xn * L(c->rnB[j]) + xt * L(c->rtB[j]));
+            wb = wb + iB * (xn * RN(rBx, rBy) + xt * RT(rBx, rBy));
         }
         soft_v_scatter_velocity(st, c->ia, c->wa, k, vax, vay, wa);
         soft_v_scatter_velocity(st, c->ib, c->wb, k, vbx, vby, wb);
@@ -58,6 +64,8 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *
         V qcA = sA[5], qsA = sA[6], qcB = sB[5], qsB = sB[6];
         V ddx = sB[3] - sA[3], ddy = sB[4] - sA[4];
         V bias[2], gamma[2], held[2];
+        V arm[2][4];                        /* rAx, rAy, rBx, rBy of each point */
+        V rnA[2], rnB[2];
         V lin, x01, x02, k11, k12, k22, a11, a22, q1, q2, det, x1, x2, y1, z2, n1, n2, d1, d2, imp;
         M ok1, ok2, ok3, ok4;
         int points = c->points;
@@ -67,6 +75,9 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *
             /* The current separation from the bodies' motion in this step. */
             V rAx = L(c->rAx[j]), rAy = L(c->rAy[j]), rBx = L(c->rBx[j]), rBy = L(c->rBy[j]);
             V prAx = qcA * rAx - qsA * rAy, prAy = qsA * rAx + qcA * rAy;
+            arm[j][0] = rAx; arm[j][1] = rAy; arm[j][2] = rBx; arm[j][3] = rBy;
+            rnA[j] = RN(rAx, rAy);
+            rnB[j] = RN(rBx, rBy);
             V prBx = qcB * rBx - qsB * rBy, prBy = qsB * rBx + qcB * rBy;
             V s = (ddx + (prBx - prAx)) * nx + (ddy + (prBy - prAy)) * ny + L(c->base[j]);
             M spec = V_GT(s, zero);
@@ -94,7 +105,7 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *
             V m1;
             x01 = L(c->normalImpulse[0]);
             k11 = L(c->k11);
-            q1 = lin + wb * L(c->rnB[0]) - wa * L(c->rnA[0]) + bias[0];
+            q1 = lin + wb * rnB[0] - wa * rnA[0] + bias[0];
             n1 = x01 - (q1 + k11 * gamma[0] * (x01 - held[0])) / (k11 * (one + gamma[0]));
             n1 = V_SEL(V_LT(n1, zero), zero, n1);
             S(c->normalImpulse[0], n1);
@@ -105,10 +116,10 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *
             d1 = n1 - x01;
             vax = vax - mA * (d1 * nx);
             vay = vay - mA * (d1 * ny);
-            wa = wa - iA * (L(c->rnA[0]) * d1);
+            wa = wa - iA * (rnA[0] * d1);
             vbx = vbx + mB * (d1 * nx);
             vby = vby + mB * (d1 * ny);
-            wb = wb + iB * (L(c->rnB[0]) * d1);
+            wb = wb + iB * (rnB[0] * d1);
             goto friction;
         }
         /* Both normal rows at once (the 2x2 LCP, Box2D 2.x's cases). */
@@ -117,8 +128,8 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *
         k11 = L(c->k11); k12 = L(c->k12); k22 = L(c->k22);
         a11 = k11 * (one + gamma[0]);
         a22 = k22 * (one + gamma[1]);
-        q1 = lin + wb * L(c->rnB[0]) - wa * L(c->rnA[0]) + bias[0] - (k11 * x01 + k12 * x02) - k11 * gamma[0] * held[0];
-        q2 = lin + wb * L(c->rnB[1]) - wa * L(c->rnA[1]) + bias[1] - (k12 * x01 + k22 * x02) - k22 * gamma[1] * held[1];
+        q1 = lin + wb * rnB[0] - wa * rnA[0] + bias[0] - (k11 * x01 + k12 * x02) - k11 * gamma[0] * held[0];
+        q2 = lin + wb * rnB[1] - wa * rnA[1] + bias[1] - (k12 * x01 + k22 * x02) - k22 * gamma[1] * held[1];
         det = a11 * a22 - k12 * k12;
         x1 = (k12 * q2 - a22 * q1) / det;
         x2 = (k12 * q1 - a11 * q2) / det;
@@ -146,10 +157,10 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *
         imp = d1 + d2;
         vax = vax - mA * (imp * nx);
         vay = vay - mA * (imp * ny);
-        wa = wa - iA * (L(c->rnA[0]) * d1 + L(c->rnA[1]) * d2);
+        wa = wa - iA * (rnA[0] * d1 + rnA[1] * d2);
         vbx = vbx + mB * (imp * nx);
         vby = vby + mB * (imp * ny);
-        wb = wb + iB * (L(c->rnB[0]) * d1 + L(c->rnB[1]) * d2);
+        wb = wb + iB * (rnB[0] * d1 + rnB[1] * d2);
     friction:
         if (!useBias) {
             /* Friction in the relax pass only; tangent t = perp(n). */
@@ -158,8 +169,8 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *
                 V rtA, rtB;
                 if (j == 1 && points == 1)
                     break;
-                rtA = L(c->rtA[j]);
-                rtB = L(c->rtB[j]);
+                rtA = RT(arm[j][0], arm[j][1]);
+                rtB = RT(arm[j][2], arm[j][3]);
                 V vt = ((vby - vay) * nx - (vbx - vax) * ny) + wb * rtB - wa * rtA + surfaceT;
                 V old = L(c->tangentImpulse[j]);
                 V maxF = mu * L(c->normalImpulse[j]);
@@ -218,6 +229,8 @@ static void SOFT_KERNEL(soft_solve_range)(SoftLanes *c, int n, SoftState *st, do
 #undef S
 #undef G
 #undef P
+#undef RN
+#undef RT
 
 /* The instantiation's type and accessor macros, for the next one (the V_*
  * operations are _soft_lanes.h's to undefine). */

@@ -1185,10 +1185,6 @@ cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, int k, int i) noexcept n
         ln.rAy[j][k] = sp.rAy
         ln.rBx[j][k] = sp.rBx
         ln.rBy[j][k] = sp.rBy
-        ln.rnA[j][k] = sp.rnA
-        ln.rnB[j][k] = sp.rnB
-        ln.rtA[j][k] = sp.rtA
-        ln.rtB[j][k] = sp.rtB
         ln.base[j][k] = sp.baseSeparation
         ln.biasRate[j][k] = sp.biasRate
         ln.compliance[j][k] = sp.compliance
