@@ -161,6 +161,17 @@ cdef void *_reserve(cpSpace *space, int which, int need, size_t size) noexcept n
     scratch.cap[which] = n
     return grown
 
+cdef void *_reserve_lines(cpSpace *space, int which, int need, size_t size) noexcept nogil:
+    # As _reserve, starting on a cache line (64 bytes), for the arrays the
+    # substeps walk: a 64-byte SoftState then fills one line instead of
+    # straddling two. Their contents are rebuilt every step, so the shift
+    # of the start when the buffer grows does not matter.
+    cdef size_t extra = (64 + size - 1) // size
+    cdef char *raw = <char *>_reserve(space, which, need + <int>extra, size)
+    if raw == NULL:
+        return NULL
+    return <void *>(raw + ((64 - (<size_t>raw & 63)) & 63))
+
 
 # -- the step's context -----------------------------------------------------------------
 
@@ -569,6 +580,7 @@ cdef int SoftRethreadArbiters(SoftContext *ctx, int collided) noexcept nogil:
     # How many of this step's arbiters cpSpaceProcessComponents must thread:
     # none if the lists hold them already.
     cdef void **saved = <void **>ctx.space.softScratch.buf[SOFT_SCRATCH_THREADED]
+    cdef cpArbiter *arb
     cdef int i
     if ctx.threadedCount < 0:
         return collided
@@ -576,6 +588,17 @@ cdef int SoftRethreadArbiters(SoftContext *ctx, int collided) noexcept nogil:
             and memcmp(saved, ctx.space.arbiters.arr, collided * sizeof(void *)) == 0):
         tamias_add(&_kept_threads, 1)
         return 0
+    if ctx.space.sleepingComponents.num == 0:
+        # The lists hold exactly last step's arbiters (no sleeping ones), so
+        # emptying them comes to clearing every head and thread: no
+        # neighbour is unlinked one by one.
+        for i in range(ctx.threadedCount):
+            arb = <cpArbiter *>saved[i]
+            arb.body_a.arbiterList = NULL
+            arb.body_b.arbiterList = NULL
+            arb.thread_a.prev = arb.thread_a.next = NULL
+            arb.thread_b.prev = arb.thread_b.next = NULL
+        return collided
     for i in range(ctx.threadedCount):
         cpArbiterUnthread(<cpArbiter *>saved[i])
     return collided
@@ -590,7 +613,7 @@ cdef bint SoftGatherBodies(SoftContext *ctx) noexcept nogil:
     cdef int n = space.dynamicBodies.num + 1
     cdef SoftBody *sb
     ctx.bodies = <SoftBody *>_reserve(space, SOFT_SCRATCH_BODIES, n, sizeof(SoftBody))
-    ctx.states = <SoftState *>_reserve(space, SOFT_SCRATCH_STATES, n, sizeof(SoftState))
+    ctx.states = <SoftState *>_reserve_lines(space, SOFT_SCRATCH_STATES, n, sizeof(SoftState))
     ctx.motion = <SoftMotion *>_reserve(space, SOFT_SCRATCH_MOTION, n, sizeof(SoftMotion))
     if ctx.bodies == NULL or ctx.states == NULL or ctx.motion == NULL:
         return 0
@@ -1117,7 +1140,7 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
             start[kind][c] = total
             total += (counts[kind][c] + SOFT_LANES - 1) // SOFT_LANES
     ctx.colorLanes[SOFT_GRAPH_COLORS] = total
-    ctx.lanes = <SoftLanes *>_reserve(space, SOFT_SCRATCH_LANES, total, sizeof(SoftLanes))
+    ctx.lanes = <SoftLanes *>_reserve_lines(space, SOFT_SCRATCH_LANES, total, sizeof(SoftLanes))
     if ctx.lanes == NULL:
         return 0
     # Where each contact goes (here, in order); the copying into the lanes
