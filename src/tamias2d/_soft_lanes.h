@@ -55,8 +55,6 @@ typedef struct {
     int points;                           /* 1 or 2: every lane's manifold has that many */
     int ia[SOFT_LANES], ib[SOFT_LANES];   /* SoftState slots */
     int wa[SOFT_LANES], wb[SOFT_LANES];   /* write the body back (movable, not slot 0) */
-    int src[SOFT_LANES];                  /* SoftContact index, -1: empty lane */
-    void *dst[SOFT_LANES];                /* its arbiter's cpContacts (the step's impulses go there) */
     double mA[SOFT_LANES], iA[SOFT_LANES], mB[SOFT_LANES], iB[SOFT_LANES];
     double nx[SOFT_LANES], ny[SOFT_LANES];
     double friction[SOFT_LANES], surfaceT[SOFT_LANES];
@@ -66,22 +64,32 @@ typedef struct {
     double biasRate[2][SOFT_LANES], compliance[2][SOFT_LANES], preload[2][SOFT_LANES];
     double tangentMass[2][SOFT_LANES];
     double normalImpulse[2][SOFT_LANES], tangentImpulse[2][SOFT_LANES];
-    double maxNormalImpulse[2][SOFT_LANES];
     double totalNormal[2][SOFT_LANES], totalTangent[2][SOFT_LANES];
 } SoftLanes;
+
+/* What the passes over a lane do not read, beside it in an array of the
+ * same index: every byte of a SoftLanes is streamed through the cache in
+ * each of a step's dozen passes (a lane 256 bytes longer costs them
+ * 11-17%). maxNormalImpulse is read and written only in steps with an
+ * elastic contact (restitution reads it). */
+typedef struct {
+    int src[SOFT_LANES];                  /* SoftContact index, -1: empty lane */
+    void *dst[SOFT_LANES];                /* its arbiter's cpContacts (the step's impulses go there) */
+    double maxNormalImpulse[2][SOFT_LANES];
+} SoftLaneLinks;
 
 /* Far apart: a row with this separation is speculative and its bias keeps
  * its impulse at zero. */
 #define SOFT_LANE_FAR 1e30
 
-static inline void SoftLanesClear(SoftLanes *c, int k) {
+static inline void SoftLanesClear(SoftLanes *c, SoftLaneLinks *x, int k) {
     /* Lane k (of a colour's last, part-filled lane) takes no impulse: it
      * joins the immovable slot 0 to itself, its rows far apart. */
     int p;
     c->ia[k] = c->ib[k] = 0;
     c->wa[k] = c->wb[k] = 0;
-    c->src[k] = -1;
-    c->dst[k] = 0;
+    x->src[k] = -1;
+    x->dst[k] = 0;
     c->mA[k] = c->iA[k] = c->mB[k] = c->iB[k] = 0.0;
     c->nx[k] = 0.0; c->ny[k] = 1.0;
     c->friction[k] = c->surfaceT[k] = 0.0;
@@ -92,7 +100,7 @@ static inline void SoftLanesClear(SoftLanes *c, int k) {
         c->biasRate[p][k] = c->compliance[p][k] = c->preload[p][k] = 0.0;
         c->tangentMass[p][k] = 0.0;
         c->normalImpulse[p][k] = c->tangentImpulse[p][k] = 0.0;
-        c->maxNormalImpulse[p][k] = 0.0;
+        x->maxNormalImpulse[p][k] = 0.0;
         c->totalNormal[p][k] = c->totalTangent[p][k] = 0.0;
     }
 }
@@ -381,20 +389,20 @@ static inline void SoftLanesWarmStart(SoftLanes *c, int n, SoftState *st) {
 /* accumulate (relax passes only): add the lane's impulses to its step
  * totals after solving it, as the substep's last pass does; trackMax: keep
  * the points' largest normal impulses (for restitution). */
-static inline void SoftLanesSolve(SoftLanes *c, int n, SoftState *st, double inv_h, double pushOut,
-                                  int useBias, int accumulate, int trackMax) {
+static inline void SoftLanesSolve(SoftLanes *c, SoftLaneLinks *x, int n, SoftState *st, double inv_h,
+                                  double pushOut, int useBias, int accumulate, int trackMax) {
 #if SOFT_HAVE_AVX2
     if (soft_lanes_path == SOFT_PATH_AVX2) {
-        soft_solve_range_avx2(c, n, st, inv_h, pushOut, useBias, accumulate, trackMax);
+        soft_solve_range_avx2(c, x, n, st, inv_h, pushOut, useBias, accumulate, trackMax);
         return;
     }
 #endif
 #if SOFT_HAVE_SIMD
     if (soft_lanes_path == SOFT_PATH_SIMD) {
-        soft_solve_range_simd(c, n, st, inv_h, pushOut, useBias, accumulate, trackMax);
+        soft_solve_range_simd(c, x, n, st, inv_h, pushOut, useBias, accumulate, trackMax);
         return;
     }
 #endif
-    soft_solve_range_scalar(c, n, st, inv_h, pushOut, useBias, accumulate, trackMax);
+    soft_solve_range_scalar(c, x, n, st, inv_h, pushOut, useBias, accumulate, trackMax);
 }
 

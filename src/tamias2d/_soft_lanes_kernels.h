@@ -47,7 +47,8 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftSt
 
 /* trackMax: keep each point's largest normal impulse of the step (only
  * restitution reads it, so a step without elastic contacts skips it). */
-static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *st, double inv_h_s,
+static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftLaneLinks *x, SoftState *st,
+                                                       double inv_h_s,
                                                        double pushOut_s, int useBias, int accumulate,
                                                        int trackMax) {
     int k, j;
@@ -110,8 +111,8 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *
             n1 = V_SEL(V_LT(n1, zero), zero, n1);
             S(c->normalImpulse[0], n1);
             if (trackMax) {
-                m1 = L(c->maxNormalImpulse[0]);
-                S(c->maxNormalImpulse[0], V_SEL(V_GT(n1, m1), n1, m1));
+                m1 = L(x->maxNormalImpulse[0]);
+                S(x->maxNormalImpulse[0], V_SEL(V_GT(n1, m1), n1, m1));
             }
             d1 = n1 - x01;
             vax = vax - mA * (d1 * nx);
@@ -150,9 +151,9 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftState *
         S(c->normalImpulse[0], n1);
         S(c->normalImpulse[1], n2);
         if (trackMax) {
-            V m1 = L(c->maxNormalImpulse[0]), m2 = L(c->maxNormalImpulse[1]);
-            S(c->maxNormalImpulse[0], V_SEL(V_GT(n1, m1), n1, m1));
-            S(c->maxNormalImpulse[1], V_SEL(V_GT(n2, m2), n2, m2));
+            V m1 = L(x->maxNormalImpulse[0]), m2 = L(x->maxNormalImpulse[1]);
+            S(x->maxNormalImpulse[0], V_SEL(V_GT(n1, m1), n1, m1));
+            S(x->maxNormalImpulse[1], V_SEL(V_GT(n2, m2), n2, m2));
         }
         imp = d1 + d2;
         vax = vax - mA * (imp * nx);
@@ -209,9 +210,10 @@ static void SOFT_KERNEL(soft_warm_start_range)(SoftLanes *c, int n, SoftState *s
 
 #define SOFT_SOLVE_LOOP(bias, acc, track) \
     for (i = 0; i < n; i++) \
-        SOFT_KERNEL(soft_solve)(&c[i], st, inv_h, pushOut, (bias), (acc), (track))
+        SOFT_KERNEL(soft_solve)(&c[i], &x[i], st, inv_h, pushOut, (bias), (acc), (track))
 
-static void SOFT_KERNEL(soft_solve_range)(SoftLanes *c, int n, SoftState *st, double inv_h,
+static void SOFT_KERNEL(soft_solve_range)(SoftLanes *c, SoftLaneLinks *x, int n, SoftState *st,
+                                          double inv_h,
                                           double pushOut, int useBias, int accumulate,
                                           int trackMax) {
     int i;

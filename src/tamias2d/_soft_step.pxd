@@ -119,8 +119,6 @@ cdef extern from "_soft_lanes.h" nogil:
         int ib[SOFT_LANES]
         int wa[SOFT_LANES]
         int wb[SOFT_LANES]
-        int src[SOFT_LANES]
-        void *dst[SOFT_LANES]
         cpFloat mA[SOFT_LANES]
         cpFloat iA[SOFT_LANES]
         cpFloat mB[SOFT_LANES]
@@ -143,14 +141,17 @@ cdef extern from "_soft_lanes.h" nogil:
         cpFloat tangentMass[2][SOFT_LANES]
         cpFloat normalImpulse[2][SOFT_LANES]
         cpFloat tangentImpulse[2][SOFT_LANES]
-        cpFloat maxNormalImpulse[2][SOFT_LANES]
         cpFloat totalNormal[2][SOFT_LANES]
         cpFloat totalTangent[2][SOFT_LANES]
-    void SoftLanesClear(SoftLanes *c, int k)
+    ctypedef struct SoftLaneLinks:
+        int src[SOFT_LANES]
+        void *dst[SOFT_LANES]
+        cpFloat maxNormalImpulse[2][SOFT_LANES]
+    void SoftLanesClear(SoftLanes *c, SoftLaneLinks *x, int k)
     # n lanes from c (trackMax: keep maxNormalImpulse, which only restitution reads)
     void SoftLanesWarmStart(SoftLanes *c, int n, SoftState *st)
-    void SoftLanesSolve(SoftLanes *c, int n, SoftState *st, cpFloat inv_h, cpFloat pushOut,
-                        int useBias, int accumulate, int trackMax)
+    void SoftLanesSolve(SoftLanes *c, SoftLaneLinks *x, int n, SoftState *st, cpFloat inv_h,
+                        cpFloat pushOut, int useBias, int accumulate, int trackMax)
     enum: SOFT_PATH_SCALAR, SOFT_PATH_SIMD, SOFT_PATH_AVX2
     void SoftLanesInit()
     int SoftLanesPathAvailable(int path)

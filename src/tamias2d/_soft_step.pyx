@@ -139,6 +139,7 @@ cdef enum:
     SOFT_SCRATCH_KEYS         # what the colouring reads of each contact (SoftColorKey)
     SOFT_SCRATCH_THREADED     # last step's arbiters, still threaded (SoftResetArbiters)
     SOFT_SCRATCH_MOTION       # SoftMotion of each body slot
+    SOFT_SCRATCH_LANE_LINKS   # SoftLaneLinks of each lane
     SOFT_SCRATCH_COUNT
 
 # (cpSoftScratch holds 16 buffers.)
@@ -213,6 +214,7 @@ cdef struct SoftContext:
     int *contactSource        # contact i is arbiter contactSource[i] of space.arbiters
     cpFloat warmCoef, loadCoef   # last step's impulses to this substep's, to a load
     SoftLanes *lanes          # the coloured contacts, colour by colour
+    SoftLaneLinks *laneLinks  # beside each lane: its contacts' sources and destinations
     int colorLanes[SOFT_GRAPH_COLORS + 1]   # colour c: lanes[colorLanes[c]:colorLanes[c+1]]
     int *overflow             # SoftContact indices solved one by one
     volatile long shapesUpdated   # by SoftUpdateShapes
@@ -1141,7 +1143,9 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
             total += (counts[kind][c] + SOFT_LANES - 1) // SOFT_LANES
     ctx.colorLanes[SOFT_GRAPH_COLORS] = total
     ctx.lanes = <SoftLanes *>_reserve_lines(space, SOFT_SCRATCH_LANES, total, sizeof(SoftLanes))
-    if ctx.lanes == NULL:
+    ctx.laneLinks = <SoftLaneLinks *>_reserve(space, SOFT_SCRATCH_LANE_LINKS, total,
+                                              sizeof(SoftLaneLinks))
+    if ctx.lanes == NULL or ctx.laneLinks == NULL:
         return 0
     # Where each contact goes (here, in order); the copying into the lanes
     # after, on the pool.
@@ -1161,9 +1165,9 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
         for kind in range(2):
             # The last lane of a kind may be part empty.
             if fill[kind][c] % SOFT_LANES != 0:
-                ln = &ctx.lanes[start[kind][c] + fill[kind][c] // SOFT_LANES]
+                i = start[kind][c] + fill[kind][c] // SOFT_LANES
                 for k in range(fill[kind][c] % SOFT_LANES, SOFT_LANES):
-                    SoftLanesClear(ln, k)
+                    SoftLanesClear(&ctx.lanes[i], &ctx.laneLinks[i], k)
     return 1
 
 cdef void SoftPackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
@@ -1171,9 +1175,11 @@ cdef void SoftPackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
     for i in range(begin, end):
         slot = ctx.laneSlots[i]
         if slot >= 0:
-            SoftPackLane(ctx, &ctx.lanes[slot // SOFT_LANES], slot % SOFT_LANES, i)
+            SoftPackLane(ctx, &ctx.lanes[slot // SOFT_LANES], &ctx.laneLinks[slot // SOFT_LANES],
+                         slot % SOFT_LANES, i)
 
-cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, int k, int i) noexcept nogil:
+cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, SoftLaneLinks *links, int k,
+                       int i) noexcept nogil:
     cdef SoftContact *sc = &ctx.contacts[i]
     cdef SoftBody *a = &ctx.bodies[sc.ia]
     cdef SoftBody *b = &ctx.bodies[sc.ib]
@@ -1183,8 +1189,8 @@ cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, int k, int i) noexcept n
     ln.ib[k] = sc.ib
     ln.wa[k] = SoftMovable(ctx, sc.ia)
     ln.wb[k] = SoftMovable(ctx, sc.ib)
-    ln.src[k] = i
-    ln.dst[k] = sc.dst
+    links.src[k] = i
+    links.dst[k] = sc.dst
     ln.mA[k] = a.m_inv
     ln.iA[k] = a.i_inv
     ln.mB[k] = b.m_inv
@@ -1215,7 +1221,7 @@ cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, int k, int i) noexcept n
         ln.tangentMass[j][k] = sp.tangentMass
         ln.normalImpulse[j][k] = sp.normalImpulse
         ln.tangentImpulse[j][k] = sp.tangentImpulse
-        ln.maxNormalImpulse[j][k] = 0.0
+        links.maxNormalImpulse[j][k] = 0.0
         ln.totalNormal[j][k] = 0.0
         ln.totalTangent[j][k] = 0.0
 
@@ -1506,28 +1512,30 @@ cdef void SoftUnpackLanes(SoftContext *ctx, int begin, int end, bint store) noex
     # in the same pass).
     cdef int i, j, k
     cdef SoftLanes *ln
+    cdef SoftLaneLinks *links
     cdef SoftContact *sc
     cdef SoftPoint *sp
     cdef cpContact *con
     for i in range(begin, end):
         ln = &ctx.lanes[i]
+        links = &ctx.laneLinks[i]
         for k in range(SOFT_LANES):
-            if ln.src[k] < 0:
+            if links.src[k] < 0:
                 continue
             if store:
                 # Through the lane's own pointer: the SoftContact (read in
                 # colour order, out of its order) is not touched.
-                con = <cpContact *>ln.dst[k]
+                con = <cpContact *>links.dst[k]
                 for j in range(ln.points):
                     con[j].jnAcc = ln.totalNormal[j][k]
                     con[j].jtAcc = ln.totalTangent[j][k]
                 continue
-            sc = &ctx.contacts[ln.src[k]]
+            sc = &ctx.contacts[links.src[k]]
             for j in range(sc.count):
                 sp = &sc.p[j]
                 sp.normalImpulse = ln.normalImpulse[j][k]
                 sp.tangentImpulse = ln.tangentImpulse[j][k]
-                sp.maxNormalImpulse = ln.maxNormalImpulse[j][k]
+                sp.maxNormalImpulse = links.maxNormalImpulse[j][k]
                 sp.totalNormal = ln.totalNormal[j][k]
                 sp.totalTangent = ln.totalTangent[j][k]
 
@@ -1823,11 +1831,11 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
     elif task == SOFT_TASK_WARM_START:
         SoftLanesWarmStart(&ctx.lanes[begin], end - begin, ctx.states)
     elif task == SOFT_TASK_SOLVE:
-        SoftLanesSolve(&ctx.lanes[begin], end - begin, ctx.states, ctx.inv_h, ctx.pushOut, flag, 0,
-                       tamias_load(&ctx.elastic) != 0)
+        SoftLanesSolve(&ctx.lanes[begin], &ctx.laneLinks[begin], end - begin, ctx.states,
+                       ctx.inv_h, ctx.pushOut, flag, 0, tamias_load(&ctx.elastic) != 0)
     elif task == SOFT_TASK_RELAX_ACCUMULATE:
-        SoftLanesSolve(&ctx.lanes[begin], end - begin, ctx.states, ctx.inv_h, ctx.pushOut, 0, 1,
-                       tamias_load(&ctx.elastic) != 0)
+        SoftLanesSolve(&ctx.lanes[begin], &ctx.laneLinks[begin], end - begin, ctx.states,
+                       ctx.inv_h, ctx.pushOut, 0, 1, tamias_load(&ctx.elastic) != 0)
     elif task == SOFT_TASK_PREPARE:
         SoftPrepareContactRange(ctx, begin, end)
     elif task == SOFT_TASK_NARROW:
