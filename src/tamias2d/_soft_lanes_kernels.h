@@ -16,6 +16,10 @@
  * the same bits) rather than stored: a quarter fewer bytes per lane. */
 #define RN(rx, ry) ((rx) * ny - (ry) * nx)
 #define RT(rx, ry) ((rx) * nx + (ry) * ny)
+/* A two-point lane's 2x2 normal mass matrix, worked out from the arms as
+ * SoftPrepareBlock does (the same expressions, so the same bits) rather
+ * than stored: diagonal entry j, and k12 where it is used. */
+#define KJJ(j) ((mA + mB) + iA * rnA[j] * rnA[j] + iB * rnB[j] * rnB[j])
 
 static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftState *st) {
     int k, j;
@@ -90,7 +94,7 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftLaneLin
                 V b = L(c->biasRate[j]) * s;
                 V lim;
                 held[j] = V_SEL(V_LT(x0, pre), x0, pre);
-                lim = negPush - L(j == 0 ? c->k11 : c->k22) * g * (x0 - held[j]);
+                lim = negPush - (points == 2 ? KJJ(j) : L(c->k11)) * g * (x0 - held[j]);
                 b = V_SEL(V_LT(b, lim), lim, b);
                 bias[j] = V_SEL(spec, s * inv_h, b);
                 gamma[j] = V_SEL(spec, zero, g);
@@ -126,7 +130,9 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftLaneLin
         /* Both normal rows at once (the 2x2 LCP, Box2D 2.x's cases). */
         x01 = L(c->normalImpulse[0]);
         x02 = L(c->normalImpulse[1]);
-        k11 = L(c->k11); k12 = L(c->k12); k22 = L(c->k22);
+        k11 = KJJ(0);
+        k22 = KJJ(1);
+        k12 = (mA + mB) + iA * rnA[0] * rnA[1] + iB * rnB[0] * rnB[1];
         a11 = k11 * (one + gamma[0]);
         a22 = k22 * (one + gamma[1]);
         q1 = lin + wb * rnB[0] - wa * rnA[0] + bias[0] - (k11 * x01 + k12 * x02) - k11 * gamma[0] * held[0];
@@ -233,6 +239,7 @@ static void SOFT_KERNEL(soft_solve_range)(SoftLanes *c, SoftLaneLinks *x, int n,
 #undef P
 #undef RN
 #undef RT
+#undef KJJ
 
 /* The instantiation's type and accessor macros, for the next one (the V_*
  * operations are _soft_lanes.h's to undefine). */

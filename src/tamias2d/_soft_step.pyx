@@ -1199,15 +1199,10 @@ cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, SoftLaneLinks *links, in
     ln.ny[k] = sc.ny
     ln.friction[k] = sc.friction
     ln.surfaceT[k] = sc.surfaceT
-    if sc.count == 2:
-        ln.k11[k] = sc.k11
-        ln.k12[k] = sc.k12
-        ln.k22[k] = sc.k22
-    else:
-        # The one-row solve's effective mass (k12, k22 unused).
+    if sc.count == 1:
+        # The one-row solve's effective mass (a two-point lane works its
+        # 2x2 matrix out from the arms).
         ln.k11[k] = 1.0 / sc.p[0].normalMass
-        ln.k12[k] = 0.0
-        ln.k22[k] = 1.0
     for j in range(sc.count):
         sp = &sc.p[j]
         ln.rAx[j][k] = sp.rAx
