@@ -89,6 +89,17 @@ def cycle_space(t, state):
         s.step(1 / 60)
 
 
+def cycle_sleeping(t, state):
+    """A space dropped while most of its bodies sleep (their arbiters keep
+    their contacts on the heap until woken), in both solvers."""
+    for solver in ("chipmunk", "soft"):
+        s, bodies = _world(t)
+        s.solver = solver
+        s.sleep_time_threshold = 0.05
+        for _ in range(40):
+            s.step(1 / 60)
+
+
 def cycle_spatial_hash(t, state):
     s, bodies = _world(t, hashing=True)
     for _ in range(10):
@@ -253,7 +264,7 @@ def measure(name, cycles, warmup):
 # -- pytest side -----------------------------------------------------------------------------
 
 CYCLES = {"space": 300, "spatial_hash": 300, "callbacks": 300, "churn": 600,
-          "loose_objects": 1500, "errors": 600, "autogeometry": 150, "leaky": 300}
+          "loose_objects": 1500, "errors": 600, "autogeometry": 150, "sleeping": 300, "leaky": 300}
 
 
 def _run(name, cycles=None, warmup=None):
