@@ -38,13 +38,16 @@
 #endif
 
 /* The solver state of one body (Box2D's b2BodyState): velocity and the
- * motion since the step began. Slot 0 is the immovable body (all zero,
+ * motion since the step began, and the inverse mass, which fills the first
+ * row's last place (the warm start gathers that row alone; in the lanes
+ * each contact's would take a cache line of every pass). Two rows of four
+ * doubles, one cache line. Slot 0 is the immovable body (all zero,
  * qc = 1). */
 typedef struct {
     double vx, vy, w;
+    double m_inv;
     double dpx, dpy;      /* centre displacement since the step began */
     double qc, qs;        /* rotation since the step began (cos, sin) */
-    double pad;
 } SoftState;
 
 /* SOFT_LANES contact constraints of one colour, all with `points` points
@@ -54,19 +57,20 @@ typedef struct {
  *
  * Laid out by cache lines (64 bytes; the lanes array starts on one and a
  * lane is a whole number of them), in the order the passes read them: the
- * warm start reads lines 0-9; the biased pass 0-8 and 10-13; the relax
- * passes 0-10, 14 and 15, and the last of a substep's also 17-18 (the
- * step's totals); a one-point lane's passes also 16. The passes are bound by
- * the bytes they stream, so the lines a pass touches decide its speed (a
- * lane 256 bytes longer made them 11-17% slower; this layout against the
- * fields in their first order, 7% fewer bytes: warm start -22%, biased
- * pass -10%, relax -5% on the large pyramid). */
+ * warm start reads lines 0-8; the biased pass 0-7 and 9-12; the relax
+ * passes 0-9, 13 and 14, and the last of a substep's also 16-17 (the
+ * step's totals); a one-point lane's passes also 15. The passes are bound by
+ * the bytes they stream (a large pile's lanes do not fit in a core's L2
+ * cache), so the lines a pass touches decide its speed: a lane 256 bytes
+ * longer made them 11-17% slower; this layout against the fields in their
+ * first order (7% fewer bytes): warm start -22%, biased pass -10%, relax -5%
+ * on the large pyramid. */
 typedef struct {
     int points;                           /* 1 or 2: every lane's manifold has that many */
     int ia[SOFT_LANES], ib[SOFT_LANES];   /* SoftState slots */
     unsigned char wa[SOFT_LANES], wb[SOFT_LANES];   /* write the body back (movable, not slot 0) */
     char pad0[64 - 4 - 2 * 4 * SOFT_LANES - 2 * SOFT_LANES];
-    double mA[SOFT_LANES], iA[SOFT_LANES], mB[SOFT_LANES], iB[SOFT_LANES];
+    double iA[SOFT_LANES], iB[SOFT_LANES];    /* (the masses are the bodies' SoftState's) */
     double nx[SOFT_LANES], ny[SOFT_LANES];
     double rAx[2][SOFT_LANES], rAy[2][SOFT_LANES], rBx[2][SOFT_LANES], rBy[2][SOFT_LANES];
     double normalImpulse[2][SOFT_LANES];
@@ -101,22 +105,22 @@ typedef struct {
 static inline void SoftLanesClear(SoftLanes *c, SoftLaneLinks *x, int k) {
     /* Lane k (of a colour's last, part-filled lane) takes no impulse: it
      * joins the immovable slot 0 to itself, its rows far apart, and writes
-     * nothing back (wa, wb). Its A side is given a unit mass and its two
-     * points opposite arms only so that the 2x2 matrix the kernels work out
-     * from them is regular (k11 = k22 = 2, k12 = 0). */
+     * nothing back (wa, wb). Its sides are given unit moments of inertia
+     * and arms only so that the 2x2 matrix the kernels work out from them
+     * is regular (k11 = k22 = 2, k12 = 0; slot 0's mass is 0). */
     int p;
     c->ia[k] = c->ib[k] = 0;
     c->wa[k] = c->wb[k] = 0;
     x->src[k] = -1;
     x->dst[k] = 0;
-    c->mA[k] = c->iA[k] = 1.0;
-    c->mB[k] = c->iB[k] = 0.0;
+    c->iA[k] = c->iB[k] = 1.0;
     c->nx[k] = 0.0; c->ny[k] = 1.0;
     c->friction[k] = c->surfaceT[k] = 0.0;
     c->k11[k] = 1.0;
     for (p = 0; p < 2; p++) {
-        c->rAx[p][k] = p == 0 ? 1.0 : -1.0;
-        c->rAy[p][k] = c->rBx[p][k] = c->rBy[p][k] = 0.0;
+        c->rAx[p][k] = 1.0;
+        c->rBx[p][k] = p == 0 ? 1.0 : -1.0;
+        c->rAy[p][k] = c->rBy[p][k] = 0.0;
         c->base[p][k] = SOFT_LANE_FAR;
         c->biasRate[p][k] = c->compliance[p][k] = c->preload[p][k] = 0.0;
         c->tangentMass[p][k] = 0.0;
@@ -174,7 +178,7 @@ static inline void soft_v2_scatter(SoftState *st, const int *idx, const unsigned
 #define SOFT_SHUFFLE2(a, b, i, j) __builtin_shuffle((a), (b), (SoftM2){i, j})
 #endif
 static inline void soft_v2_gather_state(const SoftState *st, const int *idx, int k, int full,
-                                        SoftV2 out[7]) {
+                                        SoftV2 out[8]) {
     const double *a = &st[idx[k]].vx, *b = &st[idx[k + 1]].vx;
     SoftV2 a0, a1, b0, b1;
     memcpy(&a0, a, 16); memcpy(&a1, a + 2, 16);
@@ -182,13 +186,14 @@ static inline void soft_v2_gather_state(const SoftState *st, const int *idx, int
     out[0] = SOFT_SHUFFLE2(a0, b0, 0, 2);   /* vx */
     out[1] = SOFT_SHUFFLE2(a0, b0, 1, 3);   /* vy */
     out[2] = SOFT_SHUFFLE2(a1, b1, 0, 2);   /* w */
-    out[3] = SOFT_SHUFFLE2(a1, b1, 1, 3);   /* dpx */
+    out[3] = SOFT_SHUFFLE2(a1, b1, 1, 3);   /* m_inv */
     if (full) {
         memcpy(&a0, a + 4, 16); memcpy(&a1, a + 6, 16);
         memcpy(&b0, b + 4, 16); memcpy(&b1, b + 6, 16);
-        out[4] = SOFT_SHUFFLE2(a0, b0, 0, 2);   /* dpy */
-        out[5] = SOFT_SHUFFLE2(a0, b0, 1, 3);   /* qc */
-        out[6] = SOFT_SHUFFLE2(a1, b1, 0, 2);   /* qs */
+        out[4] = SOFT_SHUFFLE2(a0, b0, 0, 2);   /* dpx */
+        out[5] = SOFT_SHUFFLE2(a0, b0, 1, 3);   /* dpy */
+        out[6] = SOFT_SHUFFLE2(a1, b1, 0, 2);   /* qc */
+        out[7] = SOFT_SHUFFLE2(a1, b1, 1, 3);   /* qs */
     }
 }
 static inline void soft_v2_scatter_velocity(SoftState *st, const int *idx, const unsigned char *w, int k,
@@ -258,17 +263,15 @@ static inline SoftV4 soft_v4_row(const SoftState *st, int i, int half) {
     return r;
 }
 static inline void soft_v4_gather_state(const SoftState *st, const int *idx, int k, int full,
-                                        SoftV4 out[7]) {
+                                        SoftV4 out[8]) {
     SoftV4 r0 = soft_v4_row(st, idx[0], 0), r1 = soft_v4_row(st, idx[1], 0);
     SoftV4 r2 = soft_v4_row(st, idx[2], 0), r3 = soft_v4_row(st, idx[3], 0);
-    SoftV4 pad;
     (void)k;
-    SOFT_TRANSPOSE4(r0, r1, r2, r3, out[0], out[1], out[2], out[3]);   /* vx, vy, w, dpx */
+    SOFT_TRANSPOSE4(r0, r1, r2, r3, out[0], out[1], out[2], out[3]);   /* vx, vy, w, m_inv */
     if (full) {
         r0 = soft_v4_row(st, idx[0], 1); r1 = soft_v4_row(st, idx[1], 1);
         r2 = soft_v4_row(st, idx[2], 1); r3 = soft_v4_row(st, idx[3], 1);
-        SOFT_TRANSPOSE4(r0, r1, r2, r3, out[4], out[5], out[6], pad);  /* dpy, qc, qs */
-        (void)pad;
+        SOFT_TRANSPOSE4(r0, r1, r2, r3, out[4], out[5], out[6], out[7]);  /* dpx, dpy, qc, qs */
     }
 }
 static inline void soft_v4_scatter_velocity(SoftState *st, const int *idx, const unsigned char *w, int k,
@@ -325,11 +328,11 @@ static inline void soft_s_scatter(SoftState *st, const int *idx, const unsigned 
     if (w[k]) *(double *)((char *)&st[idx[k]] + off) = v;
 }
 static inline void soft_s_gather_state(const SoftState *st, const int *idx, int k, int full,
-                                       double out[7]) {
+                                       double out[8]) {
     const SoftState *b = &st[idx[k]];
-    out[0] = b->vx; out[1] = b->vy; out[2] = b->w; out[3] = b->dpx;
+    out[0] = b->vx; out[1] = b->vy; out[2] = b->w; out[3] = b->m_inv;
     if (full) {
-        out[4] = b->dpy; out[5] = b->qc; out[6] = b->qs;
+        out[4] = b->dpx; out[5] = b->dpy; out[6] = b->qc; out[7] = b->qs;
     }
 }
 static inline void soft_s_scatter_velocity(SoftState *st, const int *idx, const unsigned char *w, int k,

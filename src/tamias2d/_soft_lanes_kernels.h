@@ -24,11 +24,12 @@
 static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftState *st) {
     int k, j;
     LOOP_LANES(k) {
-        V mA = L(c->mA), iA = L(c->iA), mB = L(c->mB), iB = L(c->iB);
+        V iA = L(c->iA), iB = L(c->iB);
         V nx = L(c->nx), ny = L(c->ny);
-        V sA[7], sB[7];
+        V sA[8], sB[8];
         soft_v_gather_state(st, c->ia, k, 0, sA);
         soft_v_gather_state(st, c->ib, k, 0, sB);
+        V mA = sA[3], mB = sB[3];
         V vax = sA[0], vay = sA[1], wa = sA[2];
         V vbx = sB[0], vby = sB[1], wb = sB[2];
         for (j = 0; j < c->points; j++) {
@@ -59,15 +60,16 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftLaneLin
     V zero = soft_v_splat(0.0), one = soft_v_splat(1.0);
     V inv_h = soft_v_splat(inv_h_s), negPush = soft_v_splat(-pushOut_s);
     LOOP_LANES(k) {
-        V mA = L(c->mA), iA = L(c->iA), mB = L(c->mB), iB = L(c->iB);
+        V iA = L(c->iA), iB = L(c->iB);
         V nx = L(c->nx), ny = L(c->ny);
-        V sA[7], sB[7];
+        V sA[8], sB[8];
         soft_v_gather_state(st, c->ia, k, 1, sA);
         soft_v_gather_state(st, c->ib, k, 1, sB);
+        V mA = sA[3], mB = sB[3];
         V vax = sA[0], vay = sA[1], wa = sA[2];
         V vbx = sB[0], vby = sB[1], wb = sB[2];
-        V qcA = sA[5], qsA = sA[6], qcB = sB[5], qsB = sB[6];
-        V ddx = sB[3] - sA[3], ddy = sB[4] - sA[4];
+        V qcA = sA[6], qsA = sA[7], qcB = sB[6], qsB = sB[7];
+        V ddx = sB[4] - sA[4], ddy = sB[5] - sA[5];
         V bias[2], gamma[2], held[2];
         V arm[2][4];                        /* rAx, rAy, rBx, rBy of each point */
         V rnA[2], rnB[2];

@@ -111,6 +111,7 @@ cdef extern from "_soft_lanes.h" nogil:
     enum: SOFT_LANES
     ctypedef struct SoftState:
         cpFloat vx, vy, w
+        cpFloat m_inv
         cpFloat dpx, dpy
         cpFloat qc, qs
     ctypedef struct SoftLanes:
@@ -119,9 +120,7 @@ cdef extern from "_soft_lanes.h" nogil:
         int ib[SOFT_LANES]
         unsigned char wa[SOFT_LANES]
         unsigned char wb[SOFT_LANES]
-        cpFloat mA[SOFT_LANES]
         cpFloat iA[SOFT_LANES]
-        cpFloat mB[SOFT_LANES]
         cpFloat iB[SOFT_LANES]
         cpFloat nx[SOFT_LANES]
         cpFloat ny[SOFT_LANES]

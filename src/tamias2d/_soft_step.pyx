@@ -663,6 +663,7 @@ cdef void SoftGatherRange(SoftContext *ctx, int begin, int end) noexcept nogil:
         st.qs = 0.0
         sb = &ctx.bodies[i]
         sb.m_inv = body.m_inv
+        st.m_inv = body.m_inv     # the contact kernels read it there
         sb.i_inv = body.i_inv
         sb.body = body
         sb.flags = 0
@@ -1191,9 +1192,7 @@ cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, SoftLaneLinks *links, in
     ln.wb[k] = SoftMovable(ctx, sc.ib)
     links.src[k] = i
     links.dst[k] = sc.dst
-    ln.mA[k] = a.m_inv
     ln.iA[k] = a.i_inv
-    ln.mB[k] = b.m_inv
     ln.iB[k] = b.i_inv
     ln.nx[k] = sc.nx
     ln.ny[k] = sc.ny
