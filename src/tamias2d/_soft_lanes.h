@@ -196,8 +196,8 @@ static inline void soft_v2_gather_state(const SoftState *st, const int *idx, int
         out[7] = SOFT_SHUFFLE2(a1, b1, 1, 3);   /* qs */
     }
 }
-static inline void soft_v2_scatter_velocity(SoftState *st, const int *idx, const unsigned char *w, int k,
-                                            SoftV2 vx, SoftV2 vy, SoftV2 ww) {
+static inline void soft_v2_scatter_velocity(SoftState *st, const int *idx, const unsigned char *w,
+                                            int k, SoftV2 vx, SoftV2 vy, SoftV2 ww) {
     SoftV2 row;
     if (w[k]) {
         row = SOFT_SHUFFLE2(vx, vy, 0, 2);
@@ -274,8 +274,8 @@ static inline void soft_v4_gather_state(const SoftState *st, const int *idx, int
         SOFT_TRANSPOSE4(r0, r1, r2, r3, out[4], out[5], out[6], out[7]);  /* dpx, dpy, qc, qs */
     }
 }
-static inline void soft_v4_scatter_velocity(SoftState *st, const int *idx, const unsigned char *w, int k,
-                                            SoftV4 vx, SoftV4 vy, SoftV4 ww) {
+static inline void soft_v4_scatter_velocity(SoftState *st, const int *idx, const unsigned char *w,
+                                            int k, SoftV4 vx, SoftV4 vy, SoftV4 ww) {
     SoftV4 r0, r1, r2, r3;
     (void)k;
     SOFT_TRANSPOSE4(vx, vy, ww, ww, r0, r1, r2, r3);   /* row j: vx, vy, w, (w) */
@@ -335,8 +335,8 @@ static inline void soft_s_gather_state(const SoftState *st, const int *idx, int 
         out[4] = b->dpx; out[5] = b->dpy; out[6] = b->qc; out[7] = b->qs;
     }
 }
-static inline void soft_s_scatter_velocity(SoftState *st, const int *idx, const unsigned char *w, int k,
-                                           double vx, double vy, double ww) {
+static inline void soft_s_scatter_velocity(SoftState *st, const int *idx, const unsigned char *w,
+                                           int k, double vx, double vy, double ww) {
     if (w[k]) {
         st[idx[k]].vx = vx; st[idx[k]].vy = vy; st[idx[k]].w = ww;
     }
@@ -416,8 +416,9 @@ static inline void SoftLanesWarmStart(SoftLanes *c, int n, SoftState *st) {
 /* accumulate (relax passes only): add the lane's impulses to its step
  * totals after solving it, as the substep's last pass does; trackMax: keep
  * the points' largest normal impulses (for restitution). */
-static inline void SoftLanesSolve(SoftLanes *c, SoftLaneLinks *x, int n, SoftState *st, double inv_h,
-                                  double pushOut, int useBias, int accumulate, int trackMax) {
+static inline void SoftLanesSolve(SoftLanes *c, SoftLaneLinks *x, int n, SoftState *st,
+                                  double inv_h, double pushOut, int useBias, int accumulate,
+                                  int trackMax) {
 #if SOFT_HAVE_AVX2
     if (soft_lanes_path == SOFT_PATH_AVX2) {
         soft_solve_range_avx2(c, x, n, st, inv_h, pushOut, useBias, accumulate, trackMax);

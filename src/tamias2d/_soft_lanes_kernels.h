@@ -16,9 +16,10 @@
  * the same bits) rather than stored: a quarter fewer bytes per lane. */
 #define RN(rx, ry) ((rx) * ny - (ry) * nx)
 #define RT(rx, ry) ((rx) * nx + (ry) * ny)
-/* A two-point lane's 2x2 normal mass matrix, worked out from the arms as
+/* A two-point lane's 2x2 normal mass matrix is worked out from the arms as
  * SoftPrepareBlock does (the same expressions, so the same bits) rather
- * than stored: diagonal entry j, and k12 where it is used. */
+ * than stored: KJJ(j) is its diagonal entry j (k12 is written out where it
+ * is used). */
 #define KJJ(j) ((mA + mB) + iA * rnA[j] * rnA[j] + iB * rnB[j] * rnB[j])
 
 static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftState *st) {
@@ -52,8 +53,8 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftSt
 
 /* trackMax: keep each point's largest normal impulse of the step (only
  * restitution reads it, so a step without elastic contacts skips it). */
-static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftLaneLinks *x, SoftState *st,
-                                                       double inv_h_s,
+static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftLaneLinks *x,
+                                                       SoftState *st, double inv_h_s,
                                                        double pushOut_s, int useBias, int accumulate,
                                                        int trackMax) {
     int k, j;
