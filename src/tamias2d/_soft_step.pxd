@@ -186,8 +186,8 @@ cdef struct SoftPoint:
     cpFloat totalNormal, totalTangent         # over the step (-> jnAcc, jtAcc)
     cpFloat maxNormalImpulse
     cpFloat relativeVelocity                  # normal speed at the step's start
-    cpFloat biasRate, massScale, impulseScale # softness (SoftSoftness) of this point
-    cpFloat compliance                        # impulseScale / massScale (block solver)
+    cpFloat biasRate                          # softness (SoftSoftness) of this point:
+    cpFloat compliance                        # impulseScale / massScale
     cpFloat preload                           # the impulse it holds at no depth (SoftPreload)
 
 # One arbiter's contact constraint, prepared once per step.

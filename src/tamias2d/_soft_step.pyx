@@ -860,11 +860,9 @@ cdef inline void SoftPointSoftness(SoftPoint *sp, SoftSoftness *base, cpFloat lo
             need = c / maxStiffening
         if need < c:
             c = need
-            s.massScale = 1.0 / (1.0 + c)
-            s.impulseScale = c / (1.0 + c)
+    # (The solvers read the softness as the compliance: massScale and
+    # impulseScale are 1 / (1 + c) and c / (1 + c).)
     sp.biasRate = s.biasRate
-    sp.massScale = s.massScale
-    sp.impulseScale = s.impulseScale
     sp.compliance = c
 
 
