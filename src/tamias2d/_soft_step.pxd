@@ -76,7 +76,7 @@ cdef const cpFloat SOFT_PRELOAD_CHAIN = 1.0
 # ... and this fraction in a web of contacts (a pyramid's), whose loads are
 # not fixed by the bodies' weights: with all of it there the loads wander
 # from contact to contact and a 40-row pyramid never comes to rest ...
-cdef const cpFloat SOFT_PRELOAD_WEB = 0.5
+cdef const cpFloat SOFT_PRELOAD_WEB = 0.7
 # ... and none between bodies whose masses differ more than this (a heavy
 # body on a light one bounces on a preloaded contact: Gauss-Seidel does not
 # converge there within a step). Such a point is stiffened instead so that
@@ -90,6 +90,14 @@ cdef const cpFloat SOFT_RATIO_STIFFENING = 5.0
 cdef const cpFloat SOFT_LOAD_SMOOTHING = 0.1
 # A point's first steps average its loads instead (1 / age), up to this age.
 cdef const cpFloat SOFT_LOAD_AGE = 10.0
+# A step where at least SOFT_YOUNG_MIN_PAIRS touching pairs, and more than
+# half of them, are younger than SOFT_YOUNG_AGE steps takes SOFT_YOUNG_SUBSTEPS
+# times the substeps (cpSoftStep; the pairs are counted with the bounding-box
+# tree, the default index, not with a spatial hash).
+cdef const cpFloat SOFT_YOUNG_AGE = 3.0
+cdef enum:
+    SOFT_YOUNG_MIN_PAIRS = 64
+    SOFT_YOUNG_SUBSTEPS = 4
 
 # Flags of a SoftBody.
 cdef enum:

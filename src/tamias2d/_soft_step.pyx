@@ -240,6 +240,8 @@ cdef struct SoftContext:
     int jointBodyCount
     int substeps
     cpFloat h, inv_h
+    int youngPairs            # touching pairs whose first point is under SOFT_YOUNG_AGE steps old
+    int touchingPairs
     cpFloat gx, gy
     cpFloat damping           # per substep
     cpFloat pushOut
@@ -542,6 +544,10 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
         cpSpacePushContacts(space, c.info.count)
         arb = cpSpaceAcceptCollision(space, ctx.pairs[i].a, ctx.pairs[i].b, &c.info, c.arb,
                                      c.updated, c.solid if c.updated else -1)
+        # (The point's age, carried by cpArbiterUpdate; 0 for a new one.)
+        ctx.touchingPairs += 1
+        if contacts[0].bias < SOFT_YOUNG_AGE:
+            ctx.youngPairs += 1
         if ctx.pairs[i].slot != NULL and c.arb == NULL:
             ctx.pairs[i].slot.arbiter = arb    # new this step: next step's guess
 
@@ -1985,27 +1991,15 @@ cdef int SoftPoolEnsure() except -1:
 
 # -- the step -----------------------------------------------------------------------------
 
-cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
-    cdef SoftContext ctx
-    cdef cpFloat prev_dt
+cdef void SoftSetSubsteps(SoftContext *ctx, cpFloat dt, int substeps) noexcept nogil:
+    # The substep and what follows from it: the damping per substep and the
+    # softness of contacts and joints.
+    cdef cpSpace *space = ctx.space
     cdef cpFloat hertz, staticHertz
-    cdef int collided, k, r
-    cdef bint ready
-    if dt == 0.0:
-        return
-    space.stamp += 1
-    space.arbitersStamped = 0
-    prev_dt = space.curr_dt
-    space.curr_dt = dt
-
-    ctx.space = space
-    ctx.substeps = space.soft.substeps if space.soft.substeps >= 1 else 1
+    ctx.substeps = substeps
     ctx.h = dt / ctx.substeps
     ctx.inv_h = 1.0 / ctx.h
-    ctx.gx = space.gravity.x
-    ctx.gy = space.gravity.y
     ctx.damping = pow(space.damping, ctx.h)
-    ctx.pushOut = SoftPushOut(space)
     # Stiffer than a quarter of the substep rate would not be resolved.
     hertz = space.soft.contactHertz
     if hertz > 0.25 * ctx.inv_h:
@@ -2020,6 +2014,26 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     if hertz > 0.25 * ctx.inv_h:
         hertz = 0.25 * ctx.inv_h
     ctx.jointSoft = SoftMakeSoft(hertz, space.soft.jointDampingRatio, ctx.h)
+
+cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
+    cdef SoftContext ctx
+    cdef cpFloat prev_dt
+    cdef int collided, k, r
+    cdef bint ready
+    if dt == 0.0:
+        return
+    space.stamp += 1
+    space.arbitersStamped = 0
+    prev_dt = space.curr_dt
+    space.curr_dt = dt
+
+    ctx.space = space
+    SoftSetSubsteps(&ctx, dt, space.soft.substeps if space.soft.substeps >= 1 else 1)
+    ctx.gx = space.gravity.x
+    ctx.gy = space.gravity.y
+    ctx.pushOut = SoftPushOut(space)
+    ctx.youngPairs = 0
+    ctx.touchingPairs = 0
     ctx.contactCount = 0
     ctx.elastic = 0
     ctx.jointBodyCount = 0
@@ -2046,6 +2060,12 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
 
     cpSpaceLock(space)
     StageFilterArbiterCache(space)
+    if ctx.youngPairs >= SOFT_YOUNG_MIN_PAIRS and 2 * ctx.youngPairs > ctx.touchingPairs:
+        # Most of the step's contacts are new (a pile built at rest, or
+        # dropped at once): none has a warm start or a preload yet, and a
+        # tall pile sags while its contacts learn their loads. More
+        # substeps carry the load down the pile before it has fallen far.
+        SoftSetSubsteps(&ctx, dt, ctx.substeps * SOFT_YOUNG_SUBSTEPS)
     SoftProfileMark(SOFT_STAGE_COMPONENTS)
     ready = (SoftGatherBodies(&ctx) and SoftPrepareJoints(&ctx, prev_dt)
              and SoftPrepareContacts(&ctx, prev_dt))

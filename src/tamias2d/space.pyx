@@ -1126,6 +1126,11 @@ cdef class Space:
         """Substeps per step of the soft solver (default 4; the chipmunk
         solver ignores it): each step collides once, then integrates and
         solves ``substeps`` times with ``dt / substeps``. An integer >= 1.
+        A step in which most contacts are new (at least 64 touching pairs,
+        more than half of them under 3 steps old: a pile built at rest, or
+        many bodies landing at once) takes four times as many, so that the
+        pile does not sag while its contacts learn their loads; this
+        attribute keeps the value set.
 
         >>> import tamias2d
         >>> s = tamias2d.Space(solver="soft")
