@@ -11,10 +11,10 @@ simulated second. Points nearer the bottom left are better.
 What it shows here: Chipmunk's error keeps falling as iterations are added;
 the soft solver holds the stack from one substep (its contacts are springs
 preloaded with the weight above them, so a stack stands at no depth), and
-on the pyramid levels off at about a third of a pixel: there its contacts
-are preloaded with half their load, and the springs (``space.contact_hertz``)
-give a little under the rest whatever the substeps; raising contact_hertz
-lowers that floor.
+on the pyramid levels off at about a fifth of a pixel: there its contacts
+are preloaded with 0.7 of their load, and the springs
+(``space.contact_hertz``) give a little under the rest whatever the
+substeps; raising contact_hertz lowers that floor.
 
 The result is a plot, written to a PNG headless and shown in a window
 otherwise (needs matplotlib: pip install matplotlib). Here --frames is
