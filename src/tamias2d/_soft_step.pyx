@@ -55,7 +55,7 @@ from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, StageResetArbiter
     cpSpaceRejectPair, cpSpaceAcceptCollision, cpSpacePairIsSolid, cpSpacePushFreshContactBuffer,
     cpContactBufferGetArray, cpSpacePushContacts, cpSpaceCollideShapes, cpShapeUpdateFunc,
     cpSpaceHasHandlers)
-from tamias2d.arbiter cimport cpArbiterUpdate, cpArbiterUnthread
+from tamias2d.arbiter cimport cpArbiterUpdate, cpArbiterUnthread, cpArbiterDropThreads
 from tamias2d._spatialindex cimport (cpSpatialIndexEach, cpSpatialIndexReindexQuery,
     cpSpatialIndexCount)
 from tamias2d.shape cimport cpShapeCacheBB
@@ -588,7 +588,6 @@ cdef int SoftRethreadArbiters(SoftContext *ctx, int collided) noexcept nogil:
     # How many of this step's arbiters cpSpaceProcessComponents must thread:
     # none if the lists hold them already.
     cdef void **saved = <void **>ctx.space.softScratch.buf[SOFT_SCRATCH_THREADED]
-    cdef cpArbiter *arb
     cdef int i
     if ctx.threadedCount < 0:
         return collided
@@ -601,11 +600,7 @@ cdef int SoftRethreadArbiters(SoftContext *ctx, int collided) noexcept nogil:
         # emptying them comes to clearing every head and thread: no
         # neighbour is unlinked one by one.
         for i in range(ctx.threadedCount):
-            arb = <cpArbiter *>saved[i]
-            arb.body_a.arbiterList = NULL
-            arb.body_b.arbiterList = NULL
-            arb.thread_a.prev = arb.thread_a.next = NULL
-            arb.thread_b.prev = arb.thread_b.next = NULL
+            cpArbiterDropThreads(<cpArbiter *>saved[i])
         return collided
     for i in range(ctx.threadedCount):
         cpArbiterUnthread(<cpArbiter *>saved[i])

@@ -17,6 +17,7 @@ cdef void cpCollisionDoNothing(cpArbiter *arb, cpSpace *space, void *data) noexc
 from tamias2d._private cimport cpArbiterThreadForBody, cpArbiterNext
 
 cdef void cpArbiterUnthread(cpArbiter *arb) noexcept nogil
+cdef void cpArbiterDropThreads(cpArbiter *arb) noexcept nogil
 
 # -- accessors -------------------------------------------------------------------
 cdef cpBool cpArbiterIsFirstContact(const cpArbiter *arb) noexcept nogil

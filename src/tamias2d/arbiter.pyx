@@ -70,6 +70,16 @@ cdef void cpArbiterUnthread(cpArbiter *arb) noexcept nogil:
     unthreadHelper(arb, arb.body_a)
     unthreadHelper(arb, arb.body_b)
 
+cdef void cpArbiterDropThreads(cpArbiter *arb) noexcept nogil:
+    # Every list arb is on is being emptied (all their arbiters go): clear
+    # both bodies' heads and arb's links instead of unlinking neighbours.
+    if arb.body_a != NULL:
+        arb.body_a.arbiterList = NULL
+    if arb.body_b != NULL:
+        arb.body_b.arbiterList = NULL
+    arb.thread_a.prev = arb.thread_a.next = NULL
+    arb.thread_b.prev = arb.thread_b.next = NULL
+
 
 # -- accessors -------------------------------------------------------------------
 

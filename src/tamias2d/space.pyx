@@ -67,7 +67,7 @@ from tamias2d.collision cimport (cpCollide, cpShapesCollide, collision_check_fla
     contact_point_set_from_cp, cpCollisionPeekFlags)
 from tamias2d.arbiter cimport (Arbiter, arbiter_wrap, cpArbiterInit, cpArbiterUpdate,
     cpArbiterPreStep, cpArbiterApplyCachedImpulse, cpArbiterApplyImpulse,
-    cpArbiterUnthread, cpCollisionHandlerDoNothing, cpCollisionDoNothing,
+    cpArbiterUnthread, cpArbiterDropThreads, cpCollisionHandlerDoNothing, cpCollisionDoNothing,
     cpArbiterThreadForBody, cpArbiterNext)
 from tamias2d.body cimport cpBodyRemoveConstraint, tamias_body_drop_stale_root
 from tamias2d._pickle cimport snapshot_module as _snapshot
@@ -434,12 +434,7 @@ cdef void cpSpaceRemoveShape(cpSpace *space, cpShape *shape) noexcept nogil:
 cdef inline void _forgetArbiter(cpArbiter *arb) noexcept nogil:
     # Off its bodies' lists (every list is emptied, see below) and
     # forgetting its shapes, as a pooled arbiter does.
-    if arb.body_a != NULL:
-        arb.body_a.arbiterList = NULL
-    if arb.body_b != NULL:
-        arb.body_b.arbiterList = NULL
-    arb.thread_a.prev = arb.thread_a.next = NULL
-    arb.thread_b.prev = arb.thread_b.next = NULL
+    cpArbiterDropThreads(arb)
     arb.a = NULL
     arb.b = NULL
     arb.contacts = NULL
@@ -450,19 +445,25 @@ cdef cpBool _forgetCachedArbiter(void *elt, void *data) noexcept nogil:
     _forgetArbiter(<cpArbiter *>elt)
     return 0
 
-cdef void _teardownArbiters(cpSpace *space) noexcept nogil:
+cdef bint _teardownArbiters(cpSpace *space) noexcept nogil:
     # Sleeping arbiters are out of the cache with their contacts on the heap:
     # waking every component gives those back and caches them again. Then
     # every arbiter of the space is in the cache or the arbiter array, and
-    # every arbiter on a body's list is one of them.
+    # every arbiter on a body's list is one of them. False (nothing dropped)
+    # if a component would not wake: the caller removes shapes one by one.
     cdef cpArray *arbiters = space.arbiters
-    cdef int i
-    while space.sleepingComponents.num > 0:
-        cpBodyActivate(<cpBody *>space.sleepingComponents.arr[space.sleepingComponents.num - 1])
+    cdef cpArray *components = space.sleepingComponents
+    cdef int i, left
+    while components.num > 0:
+        left = components.num
+        cpBodyActivate(<cpBody *>components.arr[left - 1])
+        if components.num >= left:
+            return 0
     cpHashSetFilter(space.cachedArbiters, _forgetCachedArbiter, NULL)
     for i in range(arbiters.num):
         _forgetArbiter(<cpArbiter *>arbiters.arr[i])
     arbiters.num = 0
+    return 1
 
 cdef void _teardownShape(cpSpace *space, cpShape *shape) noexcept nogil:
     # cpSpaceRemoveShape after _teardownArbiters: nothing sleeps and no
@@ -947,12 +948,15 @@ cdef class Space:
         # Detach every shape, constraint and body, as pymunk does when its
         # space is freed.
         cdef cpBody *body
-        _teardownArbiters(&self._space)
+        cdef bint dropped = _teardownArbiters(&self._space)
         if self._shapes is not None:
             for shape in list(self._shapes):
                 (<Shape>shape)._space = None
                 if (<Shape>shape)._shape.space == &self._space:
-                    _teardownShape(&self._space, (<Shape>shape)._shape)
+                    if dropped:
+                        _teardownShape(&self._space, (<Shape>shape)._shape)
+                    else:
+                        cpSpaceRemoveShape(&self._space, (<Shape>shape)._shape)
         # Constraints are found through the C space too: the dict may have been
         # cleared by the garbage collector while a constraint lives on.
         tamias_space_detach_constraints(&self._space)
