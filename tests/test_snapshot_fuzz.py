@@ -791,6 +791,7 @@ BODY_LINK = {"in_space": 0, "shapeList": 4, "arbiterList": 8, "root": 12, "next"
 BODY = {"m": 16, "m_inv": 24, "idleTime": 264, "size": 280}
 ARB = {"a": 48, "b": 52, "body_a": 56, "body_b": 60, "handlerAB": 96, "size": 128}
 SHAPE_BB = {"l": 64, "b": 72, "r": 80, "t": 88}
+INDEX = {"reach": 8, "size": 64}
 
 
 class Snap:
@@ -978,6 +979,21 @@ def test_sleeping_body_with_nan_or_zero_mass_is_refused():
     snap.set_f64("body structs", root, BODY["m"], 0.0)
     snap.set_f64("body structs", root, BODY["m_inv"], math.inf)
     _refused(snap, f"sleeping body {root} has mass 0.0")
+
+
+def test_tree_reaching_nan_or_negative_into_the_static_tree_is_refused():
+    # The soft solver's static reach is kept in the snapshot (a copy finds
+    # the same pairs next step); a lying one is refused, not used.
+    space = fresh_contacts()
+    space.solver = "soft"
+    for _ in range(3):
+        space.step(DT)
+    snap = Snap(space)
+    assert snap.section("dynamic index")[1] == INDEX["size"]
+    assert snap.f64("dynamic index", 0, INDEX["reach"]) > 0.0
+    for bad in (math.nan, -1.0, math.inf):
+        snap.set_f64("dynamic index", 0, INDEX["reach"], bad)
+        _refused(snap, "the dynamic index reaches .* into the static tree")
 
 
 def test_legit_states_of_the_operation_fuzzer_are_never_refused():

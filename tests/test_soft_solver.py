@@ -741,11 +741,17 @@ def test_pyramid_comes_to_rest():
     # In a web of contacts only part of the load is preloaded: with all of
     # it the loads wander between a box's supports and a big pyramid
     # never settles.
+    # (Its last wobbles die out by about 37 s; how soon depends on
+    # the order of its contacts: the broad phase's pairs.)
     sc = hc.build_pyramid(tamias2d, rows=40)
     sc.space.solver = "soft"
-    for _ in range(1800):
+    for _ in range(2300):
         sc.space.step(DT)
-    assert _kinetic_energy(sc.watch["boxes"]) < 1e-6
+    energies = []
+    for _ in range(100):
+        sc.space.step(DT)
+        energies.append(_kinetic_energy(sc.watch["boxes"]))
+    assert max(energies) < 1e-6
 
 
 @pytest.mark.parametrize("scale", [1e-3, 1e3])

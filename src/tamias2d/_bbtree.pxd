@@ -36,6 +36,10 @@ cdef struct cpBBTree:
     # (kept in the dynamic tree for both), so that a caller can tell that a
     # walk over the pairs would report the same ones in the same order.
     unsigned long long version
+    # Not Munk2D's: how far around a dynamic leaf's box its pairs with the
+    # static tree are looked for (the soft solver's reach for continuous
+    # collision, cpBBTreeSetStaticReach; 0, as in Munk2D, otherwise).
+    cpFloat staticReach
 
 cdef struct NodeChildren:
     Node *a
@@ -90,5 +94,10 @@ cdef void cpBBTreeSetVelocityFunc(cpSpatialIndex *index, cpBBTreeVelocityFunc fu
 # done) unless the index and its static index are trees.
 cdef bint cpBBTreeReindexQuerySlots(cpSpatialIndex *index, cpBBTreeSlotFunc func,
                                     void *data, unsigned long long *known) noexcept nogil
+# Sets how far around each dynamic leaf's box the static tree is searched
+# (kept in the dynamic tree). Made larger, every leaf looks for its pairs
+# afresh in the next walk, so the cached pairs are those of the new reach.
+cdef void cpBBTreeSetStaticReach(cpSpatialIndex *index, cpFloat reach) noexcept nogil
+cdef cpFloat cpBBTreeGetStaticReach(cpSpatialIndex *index) noexcept nogil
 # The tree class table (what GetTree compares klass against).
 cdef cpSpatialIndexClass *cpBBTreeClass() noexcept nogil

@@ -449,14 +449,23 @@ cdef struct MarkContext:
     cpBBTreeSlotFunc slotFunc
 
 
-cdef void MarkLeafQuery(Node *subtree, Node *leaf, bint left, MarkContext *context) noexcept nogil:
+cdef inline cpBB GrownBB(cpBB bb, cpFloat reach) noexcept nogil:
+    if reach == 0.0:
+        return bb
+    return cpBBNew(bb.l - reach, bb.b - reach, bb.r + reach, bb.t + reach)
+
+
+cdef void MarkLeafQuery(Node *subtree, Node *leaf, cpBB bb, bint left,
+                        MarkContext *context) noexcept nogil:
+    # The leaves of `subtree` whose boxes meet `bb` (the box of `leaf`, or
+    # more around it against the static tree) are paired with `leaf`.
     cdef NodeStack stack
     cdef Node *node
     StackInit(&stack)
     StackPush(&stack, subtree)
     while stack.top > 0:
         node = StackPop(&stack)
-        if cpBBIntersects(leaf.bb, node.bb):
+        if cpBBIntersects(bb, node.bb):
             if NodeIsLeaf(node):
                 if left:
                     PairInsert(leaf, node, context.tree)
@@ -482,13 +491,14 @@ cdef void MarkLeaf(Node *leaf, MarkContext *context) noexcept nogil:
         # tree, and against each ancestor's other subtree: a right sibling only
         # records pairs, a left sibling also reports them.
         if context.staticRoot != NULL:
-            MarkLeafQuery(context.staticRoot, leaf, False, context)
+            MarkLeafQuery(context.staticRoot, leaf, GrownBB(leaf.bb, tree.staticReach),
+                          False, context)
         node = leaf
         while node.parent != NULL:
             if node == node.parent.node.children.a:
-                MarkLeafQuery(node.parent.node.children.b, leaf, True, context)
+                MarkLeafQuery(node.parent.node.children.b, leaf, leaf.bb, True, context)
             else:
-                MarkLeafQuery(node.parent.node.children.a, leaf, False, context)
+                MarkLeafQuery(node.parent.node.children.a, leaf, leaf.bb, False, context)
             node = node.parent
     else:
         # Unchanged: replay the cached pairs where this leaf is side b, storing
@@ -569,7 +579,8 @@ cdef void LeafAddPairs(Node *leaf, cpBBTree *tree) noexcept nogil:
             context.func = NULL
             context.data = NULL
             context.slotFunc = NULL
-            MarkLeafQuery(dynamicRoot, leaf, True, &context)
+            MarkLeafQuery(dynamicRoot, leaf, GrownBB(leaf.bb, context.tree.staticReach),
+                          True, &context)
     else:
         context.tree = tree
         context.staticRoot = GetRootIfTree(tree.spatialIndex.staticIndex)
@@ -599,6 +610,7 @@ cdef cpSpatialIndex *cpBBTreeInit(cpBBTree *tree, cpSpatialIndexBBFunc bbfunc,
     if cpSpatialIndexInit(<cpSpatialIndex *>tree, &klass, bbfunc, staticIndex) == NULL:
         return NULL
     tree.velocityFunc = NULL
+    tree.staticReach = 0.0
     tree.leaves = cpHashSetNew(0, leafSetEql)
     tree.root = NULL
     tree.pooledNodes = NULL
@@ -621,6 +633,30 @@ cdef void cpBBTreeSetVelocityFunc(cpSpatialIndex *index, cpBBTreeVelocityFunc fu
     if index.klass != &klass:
         return      # not a tree: ignored, as Munk2D does (its warning is compiled out)
     (<cpBBTree *>index).velocityFunc = func
+
+
+cdef void RequeryLeaf(void *elt, void *data) noexcept nogil:
+    cdef Node *leaf = <Node *>elt
+    cdef cpBBTree *tree = <cpBBTree *>data
+    PairsClear(leaf, tree)
+    leaf.node.leaf.stamp = tree.stamp
+
+
+cdef void cpBBTreeSetStaticReach(cpSpatialIndex *index, cpFloat reach) noexcept nogil:
+    cdef cpBBTree *tree = GetTree(index)
+    if tree == NULL or reach == tree.staticReach:
+        return
+    if reach > tree.staticReach:
+        # The cached pairs were looked for less far: each leaf drops them and
+        # finds its pairs again in the next walk (as if it had moved).
+        cpHashSetEach(tree.leaves, RequeryLeaf, tree)
+    tree.staticReach = reach
+    TreeChanged(tree)
+
+
+cdef cpFloat cpBBTreeGetStaticReach(cpSpatialIndex *index) noexcept nogil:
+    cdef cpBBTree *tree = GetTree(index)
+    return tree.staticReach if tree != NULL else 0.0
 
 
 cdef cpSpatialIndex *cpBBTreeNew(cpSpatialIndexBBFunc bbfunc, cpSpatialIndex *staticIndex) noexcept nogil:

@@ -140,7 +140,7 @@ cdef struct ContactBuffer:
     cpContactBufferHeader header
     cpContact contacts[CONTACTS_PER_BUFFER]
 
-DEF FORMAT_VERSION = 3
+DEF FORMAT_VERSION = 4
 
 # Records. Only 8- and 4-byte fields, widest first, so there is no padding.
 
@@ -251,6 +251,7 @@ cdef struct ArbRec:
 
 cdef struct IndexRec:
     cpFloat celldim            # spatial hash
+    cpFloat reach              # tree: staticReach (the soft solver's)
     uint32_t kind              # 1 BB tree, 2 spatial hash
     uint32_t stamp
     int32_t root               # tree: root node (global number)
@@ -2638,6 +2639,7 @@ cdef int _write_indexes(Writer *w, Capture *cap) except -1:
             rec.set_size = tree.leaves.size
             rec.set_count = tree.leaves.entries
             rec.has_velocity = tree.velocityFunc != NULL
+            rec.reach = tree.staticReach
         else:
             hsh = <cpSpaceHash *>cap.index[j]
             rec.kind = 2
@@ -2684,6 +2686,8 @@ cdef int _read_indexes(Reader *r, Parsed *p) except -1:
         # are never handed out twice, so a set held at most that many.
         _check_set_size(x.set_size, x.set_count, p.s.shapeIDCounter,
                         f"the {'leaf' if x.kind == 1 else 'handle'} set of {name}")
+        if x.kind == 1 and not (_fin(x.reach) and x.reach >= 0.0):
+            _bad(f"{name} reaches {x.reach} into the static tree (a finite number >= 0)")
         if x.kind == 2:
             # use_spatial_hash(celldim, numcells) makes them again.
             if not (_fin(x.celldim) and x.celldim > 0.0):
@@ -2917,6 +2921,7 @@ cdef void _link_tree(cpBBTree *tree, Parsed *p, int j, Node *block, Pair *pairs,
             node.node.children.b = &block[r.bchild - first]
     tree.root = &block[p.index[j].root - first] if p.index[j].root >= 0 else NULL
     tree.stamp = p.index[j].stamp
+    tree.staticReach = p.index[j].reach
     # Head insertion reverses: insert each bucket's chain backwards.
     for k in range(p.index[j].set_count - 1, -1, -1):
         e = &p.sets[j][k]

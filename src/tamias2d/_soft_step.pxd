@@ -98,6 +98,11 @@ cdef const cpFloat SOFT_YOUNG_AGE = 3.0
 cdef enum:
     SOFT_YOUNG_MIN_PAIRS = 64
     SOFT_YOUNG_SUBSTEPS = 4
+# The broad phase's reach (SoftSetReach) is set to SOFT_REACH_ROOM times the
+# fastest body's travel in a step when that travel outgrows it, and brought
+# down again when the travel is less than 1 / SOFT_REACH_SHRINK of it.
+cdef const cpFloat SOFT_REACH_ROOM = 1.5
+cdef const cpFloat SOFT_REACH_SHRINK = 6.0
 
 # Flags of a SoftBody.
 cdef enum:

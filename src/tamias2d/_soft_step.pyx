@@ -59,7 +59,8 @@ from tamias2d.arbiter cimport cpArbiterUpdate, cpArbiterUnthread, cpArbiterDropT
 from tamias2d._spatialindex cimport (cpSpatialIndexEach, cpSpatialIndexReindexQuery,
     cpSpatialIndexCount)
 from tamias2d.shape cimport cpShapeCacheBB
-from tamias2d._bbtree cimport cpBBTreeReindexQuerySlots, cpPairSlot
+from tamias2d._bbtree cimport (cpBBTreeReindexQuerySlots, cpPairSlot, cpBBTreeGetStaticReach,
+    cpBBTreeSetStaticReach)
 from tamias2d.collision cimport (cpCollideSoft, CollisionDiagnostics, cpCollisionTakeDiagnostics,
     cpCollisionPutDiagnostics)
 from tamias2d._config cimport (cpCollisionID, cpHashValue, CP_MAX_CONTACTS_PER_ARBITER,
@@ -477,6 +478,27 @@ cdef void SoftUpdateShapes(SoftContext *ctx, int begin, int end) noexcept nogil:
             shape = shape.next
     tamias_add(&ctx.shapesUpdated, count)
 
+cdef void SoftSetReach(cpSpace *space) noexcept nogil:
+    # How far around a dynamic shape's box the static tree is searched, and
+    # kinematic shapes' boxes grown (space.pyx _shapeGetBB): at least as far
+    # as the fastest body travels in the step, in any direction, since its
+    # contacts may turn it toward a wall within the step. Changed seldom: a
+    # larger reach makes every leaf look for its pairs again.
+    cdef cpArray *bodies = space.dynamicBodies
+    cdef cpFloat fastest = 0.0, v2, travel, reach
+    cdef cpVect v
+    cdef int i
+    for i in range(bodies.num):
+        v = (<cpBody *>bodies.arr[i]).v
+        v2 = v.x * v.x + v.y * v.y
+        if v2 > fastest:
+            fastest = v2
+    travel = sqrt(fastest) * space.curr_dt
+    reach = cpBBTreeGetStaticReach(space.dynamicShapes)
+    if travel > reach or (SOFT_REACH_SHRINK * travel < reach and reach > space.collideMargin):
+        cpBBTreeSetStaticReach(space.dynamicShapes,
+                               fmax(SOFT_REACH_ROOM * travel, space.collideMargin))
+
 cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     cdef cpSpace *space = ctx.space
     cdef unsigned long long known, walked
@@ -499,6 +521,7 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     # The last walk of the tree's pairs is kept: while no leaf leaves its
     # box and nothing is added or removed, the next steps take their pairs
     # from there.
+    SoftSetReach(space)
     known = space.softScratch.pairsVersion if _keep_pairs else 0
     walked = known
     ctx.keepingPairs = 1

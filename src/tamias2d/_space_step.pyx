@@ -30,6 +30,7 @@ from tamias2d.body cimport (cpBodyActivate, cpBodyGetType, cpBodyIsSleeping,
     cpBodyKineticEnergy, tamias_BodySpaceHooks, tamias_set_body_space_hooks)
 from tamias2d.shape cimport cpShapeCacheBB, cpShapeFilterReject
 from tamias2d.collision cimport cpCollide
+from tamias2d._bbtree cimport cpBBTreeSetStaticReach
 from tamias2d.arbiter cimport (cpArbiterInit, cpArbiterUpdate, cpArbiterPreStep,
     cpArbiterApplyCachedImpulse, cpArbiterApplyImpulse, cpArbiterUnthread, cpCollisionDoNothing)
 from tamias2d.constraints cimport tamias_constraint_clear_impulse
@@ -380,8 +381,10 @@ cdef void cpSpaceStep(cpSpace *space, cpFloat dt) noexcept nogil:
     cdef cpFloat prev_dt = space.curr_dt
     space.curr_dt = dt
     cdef int collided
-    # Touching contacts only, as Munk2D (the soft solver widens it).
+    # Touching contacts only, as Munk2D (the soft solver widens it, and
+    # reaches further into the static tree).
     space.collideMargin = 0.0
+    cpBBTreeSetStaticReach(space.dynamicShapes, 0.0)
 
     StageResetArbiters(space)
     cpSpaceLock(space)

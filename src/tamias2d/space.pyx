@@ -52,10 +52,11 @@ from tamias2d._spatialindex cimport (cpSpatialIndexFree, cpSpatialIndexEach,
     cpSpatialIndexInsert, cpSpatialIndexRemove, cpSpatialIndexReindex,
     cpSpatialIndexReindexObject, cpSpatialIndexReindexQuery, cpSpatialIndexQuery,
     cpSpatialIndexSegmentQuery)
-from tamias2d._bbtree cimport cpBBTreeNew, cpBBTreeSetVelocityFunc, cpBBTreeVelocityFunc
+from tamias2d._bbtree cimport (cpBBTreeNew, cpBBTreeSetVelocityFunc, cpBBTreeVelocityFunc,
+    cpBBTreeClass, cpBBTreeGetStaticReach)
 from tamias2d._spacehash cimport cpSpaceHashNew
 from tamias2d.vector cimport (cpVect, cpBB, cpTransform, cpv, cpvadd, cpvsub, cpvmult,
-    cpvlengthsq, cpvlength, cpvdist, cpfmax, cpBBNew, cpBBIntersects, cpBBNewForCircle, cpTransformPoint,
+    cpvlengthsq, cpvlength, cpvdist, cpfmax, cpfmin, cpBBNew, cpBBIntersects, cpBBNewForCircle, cpTransformPoint,
     vec2d_from_cpv, cpv_from_object, cpv_from_object_finite, cptransform_from_object,
     cpbb_from_object)
 from tamias2d.body cimport (Body, cpBodyInit, cpBodySetType, cpBodyActivate,
@@ -121,16 +122,33 @@ cdef void *handlerSetTrans(const void *ptr, void *unused) noexcept nogil:
 cdef cpBB _shapeGetBB(void *obj) noexcept nogil:
     cdef cpShape *shape = <cpShape *>obj
     cdef cpSpace *space = shape.space
+    cdef cpBody *body = shape.body
     cdef cpBB bb = shape.bb
     cdef cpFloat m
+    cdef cpVect d
     if space == NULL or space.collideMargin == 0.0:
-        return bb
-    # The soft solver pairs shapes up to its speculative distance plus the
-    # step's travel apart (cpSpaceCollideShapes), so the broad phase must
-    # see them that far out too. (The chipmunk solver: margin 0, the box
-    # as it is.)
-    m = space.collideMargin + cpvlength(shape.body.v) * space.curr_dt
-    return cpBBNew(bb.l - m, bb.b - m, bb.r + m, bb.t + m)
+        return bb    # the chipmunk solver: the box as it is
+    # The soft solver pairs shapes up to its speculative distance, and a
+    # pair with a static, kinematic or bullet body also as far apart as
+    # its bodies could close in the step (cpSpaceRejectPair), so the
+    # broad phase must look that far.
+    m = space.collideMargin
+    d = cpvmult(body.v, space.curr_dt)
+    if body.isBullet or space.dynamicShapes.klass != cpBBTreeClass():
+        # Grown by the step's travel on every side: its contacts may turn
+        # it within the step.
+        m += cpvlength(d)
+        return cpBBNew(bb.l - m, bb.b - m, bb.r + m, bb.t + m)
+    # Swept along the step's travel. Two such boxes still meet wherever the
+    # bodies' approach along an axis could close the gap, and a falling
+    # pile pairs up few more shapes than one at rest. The turn a body's
+    # contacts may give it is the tree's static reach: the static tree is
+    # searched that far around a leaf (_soft_step.pyx SoftSetReach), and a
+    # kinematic shape's box grown by it.
+    if cpBodyGetType(body) == CP_BODY_TYPE_KINEMATIC:
+        m += cpBBTreeGetStaticReach(space.dynamicShapes)
+    return cpBBNew(bb.l - m + cpfmin(d.x, 0.0), bb.b - m + cpfmin(d.y, 0.0),
+                   bb.r + m + cpfmax(d.x, 0.0), bb.t + m + cpfmax(d.y, 0.0))
 
 # The dynamic tree predicts a shape's motion from its body's velocity.
 cdef cpVect ShapeVelocityFunc(void *obj) noexcept nogil:
