@@ -141,6 +141,7 @@ cdef enum:
     SOFT_SCRATCH_THREADED     # last step's arbiters, still threaded (SoftResetArbiters)
     SOFT_SCRATCH_MOTION       # SoftMotion of each body slot
     SOFT_SCRATCH_LANE_LINKS   # SoftLaneLinks of each lane
+    SOFT_SCRATCH_CHANGED_IN   # the restitution pass that last changed each body
     SOFT_SCRATCH_COUNT
 
 # (cpSoftScratch holds 16 buffers.)
@@ -1585,6 +1586,7 @@ cdef void SoftApplyRestitution(SoftContext *ctx) noexcept nogil:
     cdef cpFloat largest = 0.0     # the largest bounce speed of the step
     cdef bint changed = 1
     cdef bint resting
+    cdef int *changedIn
     for i in range(ctx.contactCount):
         sc = &ctx.contacts[i]
         for j in range(sc.count):
@@ -1593,6 +1595,15 @@ cdef void SoftApplyRestitution(SoftContext *ctx) noexcept nogil:
                 largest = sc.restitution * -sp.relativeVelocity
     if largest == 0.0:
         return
+    # From the third pass on, a contact neither of whose bodies changed
+    # since the start of the last pass is passed over: it would compute
+    # what it did then, and then it changed nothing. (The first two passes
+    # differ in what they do with resting points.) Without the array (out
+    # of memory) every contact is visited: the same bits.
+    changedIn = <int *>_reserve(ctx.space, SOFT_SCRATCH_CHANGED_IN, ctx.bodyCount, sizeof(int))
+    if changedIn != NULL:
+        for i in range(ctx.bodyCount):
+            changedIn[i] = -1
     k = 0
     while changed and k < SOFT_RESTITUTION_PASSES:
         changed = 0
@@ -1600,6 +1611,9 @@ cdef void SoftApplyRestitution(SoftContext *ctx) noexcept nogil:
             sc = &ctx.contacts[i]
             e = sc.restitution
             if e == 0.0:
+                continue
+            if k >= 2 and changedIn != NULL and (changedIn[sc.ia] < k - 1
+                                                 and changedIn[sc.ib] < k - 1):
                 continue
             sa = &ctx.states[sc.ia]
             sb = &ctx.states[sc.ib]
@@ -1640,6 +1654,11 @@ cdef void SoftApplyRestitution(SoftContext *ctx) noexcept nogil:
                 sp.normalImpulse = newImp
                 sp.totalNormal += imp
                 SoftApplyImpulse(ctx, sc, sp, imp * nx, imp * ny)
+                if changedIn != NULL:
+                    if sc.ia != 0:
+                        changedIn[sc.ia] = k
+                    if sc.ib != 0:
+                        changedIn[sc.ib] = k
         k += 1
 
 cdef void SoftStoreImpulses(SoftContext *ctx, int begin, int end) noexcept nogil:
