@@ -55,7 +55,7 @@ from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, StageResetArbiter
     cpSpaceRejectPair, cpSpaceAcceptCollision, cpSpacePairIsSolid, cpSpacePushFreshContactBuffer,
     cpContactBufferGetArray, cpSpacePushContacts, cpSpaceCollideShapes, cpShapeUpdateFunc,
     cpSpaceHasHandlers)
-from tamias2d.arbiter cimport cpArbiterUpdate, cpArbiterUnthread, cpArbiterDropThreads
+from tamias2d.arbiter cimport cpArbiterUpdate, cpArbiterUnthread, cpArbiterPushThreads
 from tamias2d._spatialindex cimport (cpSpatialIndexEach, cpSpatialIndexReindexQuery,
     cpSpatialIndexCount)
 from tamias2d.shape cimport cpShapeCacheBB
@@ -602,6 +602,7 @@ cdef void SoftResetArbiters(SoftContext *ctx) noexcept nogil:
         if saved != NULL:
             for i in range(arbiters.num):
                 (<cpArbiter *>arbiters.arr[i]).state = CP_ARBITER_STATE_NORMAL
+                (<cpArbiter *>arbiters.arr[i]).softThreaded = space.stamp
             memcpy(saved, arbiters.arr, arbiters.num * sizeof(void *))
             ctx.threadedCount = arbiters.num
             arbiters.num = 0
@@ -610,25 +611,35 @@ cdef void SoftResetArbiters(SoftContext *ctx) noexcept nogil:
 
 cdef int SoftRethreadArbiters(SoftContext *ctx, int collided) noexcept nogil:
     # How many of this step's arbiters cpSpaceProcessComponents must thread:
-    # none if the lists hold them already.
-    cdef void **saved = <void **>ctx.space.softScratch.buf[SOFT_SCRATCH_THREADED]
+    # none if the lists hold them already. With last step's arbiters still
+    # threaded (SoftResetArbiters), only the difference is done here: this
+    # step's arbiters that were not last step's are pushed onto their
+    # bodies' lists (in array order), then last step's that are not this
+    # step's are unlinked. (A full re-threading writes every body's list
+    # head and every arbiter's links: most of a settled pile's step when
+    # one of its thousands of contacts comes or goes.)
+    cdef cpSpace *space = ctx.space
+    cdef void **saved = <void **>space.softScratch.buf[SOFT_SCRATCH_THREADED]
+    cdef cpArbiter *arb
     cdef int i
     if ctx.threadedCount < 0:
         return collided
-    if (ctx.threadedCount == collided and collided == ctx.space.arbiters.num
-            and memcmp(saved, ctx.space.arbiters.arr, collided * sizeof(void *)) == 0):
+    if (ctx.threadedCount == collided and collided == space.arbiters.num
+            and memcmp(saved, space.arbiters.arr, collided * sizeof(void *)) == 0):
         tamias_add(&_kept_threads, 1)
         return 0
-    if ctx.space.sleepingComponents.num == 0:
-        # The lists hold exactly last step's arbiters (no sleeping ones), so
-        # emptying them comes to clearing every head and thread: no
-        # neighbour is unlinked one by one.
-        for i in range(ctx.threadedCount):
-            cpArbiterDropThreads(<cpArbiter *>saved[i])
-        return collided
+    for i in range(collided):
+        arb = <cpArbiter *>space.arbiters.arr[i]
+        if arb.softThreaded == space.stamp:
+            arb.softThreaded = 0         # threaded, and stays
+        else:
+            cpArbiterPushThreads(arb)
     for i in range(ctx.threadedCount):
-        cpArbiterUnthread(<cpArbiter *>saved[i])
-    return collided
+        arb = <cpArbiter *>saved[i]
+        if arb.softThreaded == space.stamp:
+            arb.softThreaded = 0
+            cpArbiterUnthread(arb)
+    return 0
 
 
 # -- gather ----------------------------------------------------------------------------

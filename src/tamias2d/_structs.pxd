@@ -266,6 +266,10 @@ cdef struct cpArbiter:
     unsigned int handlerVersion
     cpCollisionType handlerTypeA
     cpCollisionType handlerTypeB
+    # Not Munk2D's: the soft step marks last step's arbiters with the step's
+    # stamp while it works out which to unthread and which to thread (only
+    # within a step: SoftResetArbiters to SoftRethreadArbiters).
+    cpTimestamp softThreaded
 
 # -- constraints (declared for the body lists; joints are not ported yet) -------
 ctypedef void (*cpConstraintPreStepImpl)(cpConstraint *constraint, cpFloat dt) noexcept nogil

@@ -17,6 +17,9 @@ cdef void cpCollisionDoNothing(cpArbiter *arb, cpSpace *space, void *data) noexc
 from tamias2d._private cimport cpArbiterThreadForBody, cpArbiterNext
 
 cdef void cpArbiterUnthread(cpArbiter *arb) noexcept nogil
+# Pushes arb onto the heads of both its bodies' arbiter lists (as the step's
+# threading does); arb must be on neither.
+cdef void cpArbiterPushThreads(cpArbiter *arb) noexcept nogil
 cdef void cpArbiterDropThreads(cpArbiter *arb) noexcept nogil
 
 # -- accessors -------------------------------------------------------------------

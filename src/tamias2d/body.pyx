@@ -1360,7 +1360,9 @@ cdef class Body:
         """Call ``func(arbiter, *args, **kwargs)`` for each arbiter of the body.
 
         The arbiters come in Chipmunk's order (the reverse of the solver
-        order), each seen from this body (its first shape is on this body).
+        order; in the soft solver, where a step threads onto the body only
+        the arbiters that began and unthreads those that ended, newest
+        first), each seen from this body (its first shape is on this body).
         Do not keep an Arbiter after the call. An exception raised by
         ``func`` stops the iteration and propagates.
 
