@@ -580,10 +580,11 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
 # Munk2D unthreads every arbiter of the last step from its bodies' lists
 # before the collision and threads this step's on again after it (head
 # insertion in array order): two passes over every arbiter and its bodies.
-# In a pile at rest the step's arbiters are the last step's, in the same
-# order, and the lists come out as they were; so, where nothing can look at
-# the lists in between, they stay threaded and the two passes are made only
-# when the arbiters turn out to differ. Nothing can look when sleeping is off
+# In a pile the step's arbiters are mostly the last step's; so, where
+# nothing can look at the lists in between, they stay threaded, and only
+# the arbiters that began or ended are threaded or unthreaded
+# (SoftRethreadArbiters; a body's list then holds the same arbiters as
+# Munk2D's, newest first). Nothing can look when sleeping is off
 # (no waking, which walks them), no begin or pre-solve handler runs, and the
 # collision persistence is above 0 (at 0 last step's arbiters went back to
 # the pool, and may be another pair's by now). cpArbiterUpdate swaps an
