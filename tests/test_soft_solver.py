@@ -948,6 +948,32 @@ def _shoot_at_plate(solver, bullet, plate_mass=1e6):
     return worst
 
 
+def test_a_ball_knocked_toward_a_thin_wall_within_the_step_stops_at_it():
+    # The ball is at rest, 1 from a wall 1 thick, when a box 100 times
+    # heavier reaches it at 600/s: within the step it goes 10 toward the
+    # wall. Its own speed at the step's start gives its contact with the
+    # wall no reach; the fastest body's travel does (the static reach).
+    # Criterion: the ball's centre stays in front of the wall's face. (It
+    # is pressed 0.66 into the wall by the heavy box, a crush of a mass
+    # ratio of 100 between soft contacts; a quarter of its radius, the
+    # first criterion, was too tight for that. Before, it ended 6.7 behind
+    # the face.)
+    space = tamias2d.Space(solver="soft")
+    space.add(tamias2d.Poly(space.static_body, [(-1, -50), (0, -50), (0, 50), (-1, 50)]))
+    ball = tamias2d.Body(1.0, tamias2d.moment_for_circle(1.0, 0, 2.0))
+    ball.position = 3.0, 0.0
+    space.add(ball, tamias2d.Circle(ball, 2.0))
+    hammer = tamias2d.Body(100.0, tamias2d.moment_for_box(100.0, (4, 4)))
+    hammer.position = 7.2, 0.0          # 0.2 from the ball: within the speculative distance
+    hammer.velocity = -600.0, 0.0
+    space.add(hammer, tamias2d.Poly.create_box(hammer, (4, 4)))
+    lowest = math.inf
+    for _ in range(60):
+        space.step(DT)
+        lowest = min(lowest, ball.position.x)
+    assert lowest > 0.0, lowest
+
+
 def test_a_bullet_stops_at_a_thin_dynamic_plate():
     assert _shoot_at_plate("soft", bullet=True) < 0.0
 

@@ -9,7 +9,7 @@ themselves. The world (cpSpace.c) and the ``Space`` class are in
 ``space.pyx``; the queries in ``_space_query.pyx``; the contact solver of one
 arbiter in ``arbiter.pyx`` and the joints' in ``constraints.pyx``.
 """
-from libc.math cimport INFINITY, pow, sqrt
+from libc.math cimport INFINITY, pow, sqrt, fmax
 from libc.string cimport memcpy
 
 from tamias2d._config cimport (cpFloat, cpBool, cpHashValue, cpCollisionID, cpTimestamp,
@@ -30,7 +30,7 @@ from tamias2d.body cimport (cpBodyActivate, cpBodyGetType, cpBodyIsSleeping,
     cpBodyKineticEnergy, tamias_BodySpaceHooks, tamias_set_body_space_hooks)
 from tamias2d.shape cimport cpShapeCacheBB, cpShapeFilterReject
 from tamias2d.collision cimport cpCollide
-from tamias2d._bbtree cimport cpBBTreeSetStaticReach
+from tamias2d._bbtree cimport cpBBTreeSetStaticReach, cpBBTreeGetStaticReach
 from tamias2d.arbiter cimport (cpArbiterInit, cpArbiterUpdate, cpArbiterPreStep,
     cpArbiterApplyCachedImpulse, cpArbiterApplyImpulse, cpArbiterUnthread, cpCollisionDoNothing)
 from tamias2d.constraints cimport tamias_constraint_clear_impulse
@@ -231,6 +231,7 @@ cdef cpBool cpSpaceRejectPair(cpSpace *space, cpShape *a, cpShape *b,
                               cpFloat *margin_out) noexcept nogil:
     cdef cpFloat margin = space.collideMargin
     cdef cpVect dv
+    cdef cpFloat closing
     cdef bint widened
     margin_out[0] = margin
     if margin == 0.0:
@@ -248,7 +249,13 @@ cdef cpBool cpSpaceRejectPair(cpSpace *space, cpShape *a, cpShape *b,
         # alone, as Box2D: the broad phase and the narrow phase stay cheap
         # in piles.
         dv = cpvsub(b.body.v, a.body.v)
-        margin += sqrt(cpvlengthsq(dv)) * space.curr_dt
+        closing = sqrt(cpvlengthsq(dv)) * space.curr_dt
+        if a.body.m_inv == 0.0 or b.body.m_inv == 0.0:
+            # At least the tree's static reach (the fastest body's travel,
+            # with room): a body at rest may be knocked toward a wall
+            # within the step.
+            closing = fmax(closing, cpBBTreeGetStaticReach(space.dynamicShapes))
+        margin += closing
     margin_out[0] = margin
     return QueryReject(a, b, margin)
 
