@@ -32,7 +32,8 @@ from tamias2d.shape cimport cpShapeCacheBB, cpShapeFilterReject
 from tamias2d.collision cimport cpCollide
 from tamias2d._bbtree cimport cpBBTreeSetStaticReach, cpBBTreeGetStaticReach
 from tamias2d.arbiter cimport (cpArbiterInit, cpArbiterUpdate, cpArbiterPreStep,
-    cpArbiterApplyCachedImpulse, cpArbiterApplyImpulse, cpArbiterUnthread, cpCollisionDoNothing)
+    cpArbiterApplyCachedImpulse, cpArbiterApplyImpulse, cpArbiterUnthread, cpCollisionDoNothing,
+    cpArbiterPushThreads)
 from tamias2d.constraints cimport tamias_constraint_clear_impulse
 from tamias2d._private cimport (cpArbiterThreadForBody, cpArbiterNext, cpConstraintNext,
     cpSpaceArrayForBodyType, cpSpaceUncacheArbiter, cpCallHandlers, cpSpaceStampArbiter,
@@ -664,13 +665,6 @@ cdef void cpSpaceDeactivateBody(cpSpace *space, cpBody *body) noexcept nogil:
 cdef inline cpBody *ComponentRoot(cpBody *body) noexcept nogil:
     return body.sleeping.root if body != NULL else NULL
 
-cdef inline void cpBodyPushArbiter(cpBody *body, cpArbiter *arb) noexcept nogil:
-    cdef cpArbiter *next = body.arbiterList
-    cpArbiterThreadForBody(arb, body).next = next
-    if next != NULL:
-        cpArbiterThreadForBody(next, body).prev = arb
-    body.arbiterList = arb
-
 cdef inline void ComponentAdd(cpBody *root, cpBody *body) noexcept nogil:
     body.sleeping.root = root
     if body != root:
@@ -815,8 +809,7 @@ cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int threadCount) 
             if (cpBodyGetType(a) == CP_BODY_TYPE_KINEMATIC or cpBodyIsSleeping(b)
                     or _orphanBody(a, space)):
                 cpBodyActivate(b)
-        cpBodyPushArbiter(a, arb)
-        cpBodyPushArbiter(b, arb)
+        cpArbiterPushThreads(arb)
 
     if sleep:
         # Bodies jointed to a kinematic body stay awake.

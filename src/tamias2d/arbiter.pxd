@@ -17,9 +17,18 @@ cdef void cpCollisionDoNothing(cpArbiter *arb, cpSpace *space, void *data) noexc
 from tamias2d._private cimport cpArbiterThreadForBody, cpArbiterNext
 
 cdef void cpArbiterUnthread(cpArbiter *arb) noexcept nogil
-# Pushes arb onto the heads of both its bodies' arbiter lists (as the step's
-# threading does); arb must be on neither.
-cdef void cpArbiterPushThreads(cpArbiter *arb) noexcept nogil
+# Pushes arb onto the head of body's arbiter list (arb must not be on it),
+# and onto both its bodies' lists (the step's threading, in both solvers).
+cdef inline void cpBodyPushArbiter(cpBody *body, cpArbiter *arb) noexcept nogil:
+    cdef cpArbiter *next = body.arbiterList
+    cpArbiterThreadForBody(arb, body).next = next
+    if next != NULL:
+        cpArbiterThreadForBody(next, body).prev = arb
+    body.arbiterList = arb
+
+cdef inline void cpArbiterPushThreads(cpArbiter *arb) noexcept nogil:
+    cpBodyPushArbiter(arb.body_a, arb)
+    cpBodyPushArbiter(arb.body_b, arb)
 cdef void cpArbiterDropThreads(cpArbiter *arb) noexcept nogil
 
 # -- accessors -------------------------------------------------------------------

@@ -70,17 +70,6 @@ cdef void cpArbiterUnthread(cpArbiter *arb) noexcept nogil:
     unthreadHelper(arb, arb.body_a)
     unthreadHelper(arb, arb.body_b)
 
-cdef inline void pushHelper(cpArbiter *arb, cpBody *body) noexcept nogil:
-    cdef cpArbiter *next = body.arbiterList
-    cpArbiterThreadForBody(arb, body).next = next
-    if next != NULL:
-        cpArbiterThreadForBody(next, body).prev = arb
-    body.arbiterList = arb
-
-cdef void cpArbiterPushThreads(cpArbiter *arb) noexcept nogil:
-    pushHelper(arb, arb.body_a)
-    pushHelper(arb, arb.body_b)
-
 cdef void cpArbiterDropThreads(cpArbiter *arb) noexcept nogil:
     # Every list arb is on is being emptied (all their arbiters go): clear
     # both bodies' heads and arb's links instead of unlinking neighbours.
