@@ -29,6 +29,9 @@ cdef inline void cpBodyPushArbiter(cpBody *body, cpArbiter *arb) noexcept nogil:
 cdef inline void cpArbiterPushThreads(cpArbiter *arb) noexcept nogil:
     cpBodyPushArbiter(arb.body_a, arb)
     cpBodyPushArbiter(arb.body_b, arb)
+
+# Clears arb's links and both its bodies' list heads, for when every list arb
+# is on is being emptied at once (freeing a space).
 cdef void cpArbiterDropThreads(cpArbiter *arb) noexcept nogil
 
 # -- accessors -------------------------------------------------------------------
