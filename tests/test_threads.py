@@ -393,6 +393,27 @@ def test_soft_step_on_two_threads_gives_the_one_thread_bits(build):
     assert one == two
 
 
+def test_threaded_soft_step_with_sensors_and_a_handler_gives_the_one_thread_bits():
+    # On threads the arbiters the narrow phase updated are pushed from
+    # packed flags and their contacts moved on the pool; a sensor's arbiter
+    # is updated but not solved (no contacts, not in space.arbiters). With
+    # a begin handler every pair goes through the one serial pass instead.
+    def with_sensors():
+        space = _big_pyramid()
+        for i, shape in enumerate(space.shapes):
+            if i % 5 == 3:
+                shape.sensor = True
+        return space
+
+    def with_handler():
+        space = with_sensors()
+        seen = []
+        space.on_collision(begin=lambda arbiter, space, data: seen.append(1))
+        return space
+    for build in (with_sensors, with_handler):
+        assert _run(_soft(build, 1), 60) == _run(_soft(build, 2), 60)
+
+
 def test_threaded_soft_step_with_python_integrators_and_joints():
     # A Python velocity_func runs its stage on the calling thread only; the
     # joints are solved there too. Same bits as one thread.

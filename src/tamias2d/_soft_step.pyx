@@ -34,11 +34,12 @@ colouring and SIMD lanes can partition these arrays later.
 from libc.math cimport INFINITY, pow, sqrt, cos, sin, fabs, fmin, fmax
 from libc.stdint cimport uint32_t
 from libc.string cimport memset, memcmp
-from tamias2d._config cimport cpFloat, cpBool
+from tamias2d._config cimport cpFloat, cpBool, cpTimestamp
 from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, cpArray, cpConstraint,
     cpSoftSettings, cpSoftScratch, TAMIAS_SOLVER_CHIPMUNK, TAMIAS_SOLVER_SOFT,
-    CP_BODY_TYPE_KINEMATIC, CP_ARBITER_STATE_FIRST_COLLISION, CP_ARBITER_STATE_NORMAL)
-from tamias2d._containers cimport cprealloc, cpfree, cpHashSetFind
+    CP_BODY_TYPE_KINEMATIC, CP_ARBITER_STATE_FIRST_COLLISION, CP_ARBITER_STATE_NORMAL,
+    CP_ARBITER_STATE_IGNORE)
+from tamias2d._containers cimport cprealloc, cpfree, cpHashSetFind, cpArrayPush
 from tamias2d._threads cimport (tamias_take_next, tamias_load, tamias_store, tamias_add,
     tamias_add_int,
     tamias_exchange, tamias_cpu_relax, tamias_yield, tamias_now_ns)
@@ -142,9 +143,11 @@ cdef enum:
     SOFT_SCRATCH_MOTION       # SoftMotion of each body slot
     SOFT_SCRATCH_LANE_LINKS   # SoftLaneLinks of each lane
     SOFT_SCRATCH_CHANGED_IN   # the restitution pass that last changed each body
+    SOFT_SCRATCH_DESTINATIONS # where each pair's contacts go in the contact buffers (SoftCollide)
+    SOFT_SCRATCH_PAIR_ARBITERS  # each updated pair's arbiter, packed (SoftCollide)
     SOFT_SCRATCH_COUNT
 
-# (cpSoftScratch holds 16 buffers.)
+# (cpSoftScratch holds 20 buffers.)
 
 cdef void *_reserve(cpSpace *space, int which, int need, size_t size) noexcept nogil:
     # Room for `need` elements of `size` bytes in scratch buffer `which`, or
@@ -227,7 +230,9 @@ cdef struct SoftContext:
     int pairCount
     int pairCap
     SoftCandidate *candidates # their narrow phase
-    unsigned char *touching   # 1: the pair has contacts
+    unsigned char *touching   # the pair's SOFT_PAIR_* flags (0: no contacts)
+    cpContact **destinations  # on threads, with updateInNarrow: where each pair's contacts go
+    cpArbiter **pairArbiters  # ... and each updated pair's arbiter (the candidate's, packed)
     bint updateInNarrow       # no begin or pre-solve callbacks: arbiters updated in parallel
     bint keepingPairs         # the broad phase's walk is being kept (SoftCollectPair)
     volatile long elastic     # a contact has restitution (set by SoftPrepareContactRange)
@@ -399,6 +404,15 @@ cdef inline void SoftKeepSide(const cpSpace *space, const cpArbiter *arb,
     if n.x * info.n.x + n.y * info.n.y <= 0.0:
         info.n = n
 
+# What the narrow phase found of a pair (SoftContext.touching), so that the
+# serial pass after it reads one byte per pair, not the pair's candidate.
+cdef enum:
+    SOFT_PAIR_TOUCHING = 1    # it has contacts
+    SOFT_PAIR_UPDATED = 2     # its cached arbiter has them (cpArbiterUpdate done)
+    SOFT_PAIR_ACCEPTED = 4    # ... and is solved (cpSpaceAcceptCollision would push it)
+    SOFT_PAIR_YOUNG = 8       # ... and its first point is under SOFT_YOUNG_AGE steps old
+    SOFT_PAIR_COUNT_SHIFT = 4 # bits 4-5: its number of contacts
+
 cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
     # First the cheap rejection (most pairs of the broad phase, whose boxes
     # are widened for continuous collision, go no further). Also finds a
@@ -430,7 +444,8 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
             c.id = 0
             c.guess = NULL
         c.info = cpCollideSoft(p.a, p.b, c.id, c.contacts, margin)
-        ctx.touching[i] = c.info.count > 0
+        ctx.touching[i] = ((SOFT_PAIR_TOUCHING | (c.info.count << SOFT_PAIR_COUNT_SHIFT))
+                           if c.info.count > 0 else 0)
         if slot != NULL:
             slot.id = c.info.id
         if c.info.count > 0:
@@ -453,6 +468,17 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
                 cpArbiterUpdate(c.arb, &c.info, ctx.space)
                 c.updated = 1
                 c.solid = cpSpacePairIsSolid(p.a, p.b)
+                ctx.touching[i] |= SOFT_PAIR_UPDATED
+                if ctx.pairArbiters != NULL:
+                    # For the threaded pass after (SoftCollide): what
+                    # cpSpaceAcceptCollision decides of it (the tree reports
+                    # each pair once a step, so it is not stamped yet).
+                    ctx.pairArbiters[i] = c.arb
+                    if (c.arb.state != CP_ARBITER_STATE_IGNORE and c.arb.processCollision
+                            and c.solid):
+                        ctx.touching[i] |= SOFT_PAIR_ACCEPTED
+                    if c.contacts[0].bias < SOFT_YOUNG_AGE:
+                        ctx.touching[i] |= SOFT_PAIR_YOUNG
 
 cdef inline void SoftPrefetchArbiter(cpSpace *space, SoftCandidate *c) noexcept nogil:
     cdef cpHashSet *arbs = space.cachedArbiters
@@ -503,10 +529,8 @@ cdef void SoftSetReach(cpSpace *space) noexcept nogil:
 cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     cdef cpSpace *space = ctx.space
     cdef unsigned long long known, walked
-    cdef SoftCandidate *c
     cdef cpContact *contacts
-    cdef cpArbiter *arb
-    cdef int i, n
+    cdef int i, n, flags, stamped
     cpSpacePushFreshContactBuffer(space)
     # The awake bodies' shapes are the dynamic index's; should they not be
     # (the counts differ), the index's walk does it again, as the chipmunk
@@ -544,36 +568,111 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     if ctx.candidates == NULL or ctx.touching == NULL:
         return  # out of memory: the flag is up, no pair is collided
     SoftProfileMark(SOFT_STAGE_BROAD_PHASE)
+    ctx.pairArbiters = NULL
+    ctx.destinations = NULL
+    if ctx.updateInNarrow and ctx.threaded:
+        ctx.destinations = <cpContact **>_reserve(space, SOFT_SCRATCH_DESTINATIONS, n,
+                                                  sizeof(cpContact *))
+        ctx.pairArbiters = <cpArbiter **>_reserve(space, SOFT_SCRATCH_PAIR_ARBITERS, n,
+                                                  sizeof(cpArbiter *))
     SoftRun(ctx, SOFT_TASK_NARROW, 0, n, 0)
     SoftProfileMark(SOFT_STAGE_NARROW_PHASE)
+    if ctx.destinations == NULL or ctx.pairArbiters == NULL:
+        # (One thread, handlers, or out of memory.)
+        for i in range(n):
+            # Fetch the arbiter of a pair a few places on (or, for a pair
+            # new this step, its slot of the arbiter cache).
+            if i + 4 < n and ctx.touching[i + 4]:
+                SoftPrefetchArbiter(space, &ctx.candidates[i + 4])
+            if ctx.touching[i]:
+                SoftAcceptPair(ctx, i)
+        return
+    # On threads, with every cached arbiter updated in the narrow phase,
+    # this pass (in pair order, on this thread) only places each pair's
+    # contacts in the contact buffers and pushes the solved arbiters, from
+    # the pairs' flags and arbiters packed in arrays; the pairs new this
+    # step go through cpSpaceAcceptCollision here. Copying the contacts and
+    # stamping the arbiters follow on the pool (SoftMoveContacts). The same
+    # arbiters, in the same order, with the same contacts in the same
+    # places, as the one pass above; a serial pass that reads each pair's
+    # candidate and arbiter was most of a large pile's serial time.
+    stamped = 0
     for i in range(n):
-        # Fetch the arbiter of a pair a few places on (or, for a pair new
-        # this step, its slot of the arbiter cache).
-        if i + 4 < n and ctx.touching[i + 4]:
-            SoftPrefetchArbiter(space, &ctx.candidates[i + 4])
-        if not ctx.touching[i]:
+        flags = ctx.touching[i]
+        if not flags & SOFT_PAIR_UPDATED:
+            if flags:
+                SoftAcceptPair(ctx, i)
+            continue
+        contacts = cpContactBufferGetArray(space)
+        ctx.destinations[i] = contacts
+        if contacts == NULL:
+            continue    # out of memory: the flag is up, the pair is skipped
+        ctx.touchingPairs += 1
+        if flags & SOFT_PAIR_YOUNG:
+            ctx.youngPairs += 1
+        stamped += 1
+        if flags & SOFT_PAIR_ACCEPTED:
+            cpSpacePushContacts(space, flags >> SOFT_PAIR_COUNT_SHIFT)
+            cpArrayPush(space.arbiters, ctx.pairArbiters[i])   # (failing: the flag is up)
+    # (Each was cached and not stamped in this step: cpSpaceStampArbiter.)
+    space.arbitersStamped += stamped
+    SoftRun(ctx, SOFT_TASK_MOVE_CONTACTS, 0, n, 0)
+
+cdef void SoftAcceptPair(SoftContext *ctx, int i) noexcept nogil:
+    # Pair i's contacts into the contact buffers, its arbiter through
+    # cpSpaceAcceptCollision (made if new, begin / pre-solve handlers).
+    cdef cpSpace *space = ctx.space
+    cdef SoftCandidate *c = &ctx.candidates[i]
+    cdef cpContact *contacts = cpContactBufferGetArray(space)
+    cdef cpArbiter *arb
+    if contacts == NULL:
+        # Out of memory: the flag is up, the pair is skipped.
+        if c.updated:
+            c.arb.contacts = NULL
+            c.arb.count = 0
+        return
+    memcpy(contacts, c.contacts, c.info.count * sizeof(cpContact))
+    c.info.arr = contacts
+    if c.updated:
+        c.arb.contacts = contacts
+    cpSpacePushContacts(space, c.info.count)
+    arb = cpSpaceAcceptCollision(space, ctx.pairs[i].a, ctx.pairs[i].b, &c.info, c.arb,
+                                 c.updated, c.solid if c.updated else -1)
+    # (The point's age, carried by cpArbiterUpdate; 0 for a new one.)
+    ctx.touchingPairs += 1
+    if contacts[0].bias < SOFT_YOUNG_AGE:
+        ctx.youngPairs += 1
+    if ctx.pairs[i].slot != NULL and c.arb == NULL:
+        ctx.pairs[i].slot.arbiter = arb    # new this step: next step's guess
+
+cdef void SoftMoveContacts(SoftContext *ctx, int begin, int end) noexcept nogil:
+    # The updated pairs' contacts to where SoftCollide placed them, and
+    # what cpSpaceAcceptCollision does to their arbiters (on the pool).
+    cdef cpTimestamp stamp = ctx.space.stamp
+    cdef SoftCandidate *c
+    cdef cpContact *contacts
+    cdef cpArbiter *arb
+    cdef int i, flags
+    for i in range(begin, end):
+        if i + 4 < end and ctx.touching[i + 4] & SOFT_PAIR_UPDATED:
+            tamias_prefetch(ctx.pairArbiters[i + 4])
+        flags = ctx.touching[i]
+        if not flags & SOFT_PAIR_UPDATED:
             continue
         c = &ctx.candidates[i]
-        contacts = cpContactBufferGetArray(space)
-        if contacts == NULL:
-            # Out of memory: the flag is up, the pair is skipped.
-            if c.updated:
-                c.arb.contacts = NULL
-                c.arb.count = 0
-            continue
-        memcpy(contacts, c.contacts, c.info.count * sizeof(cpContact))
-        c.info.arr = contacts
-        if c.updated:
-            c.arb.contacts = contacts
-        cpSpacePushContacts(space, c.info.count)
-        arb = cpSpaceAcceptCollision(space, ctx.pairs[i].a, ctx.pairs[i].b, &c.info, c.arb,
-                                     c.updated, c.solid if c.updated else -1)
-        # (The point's age, carried by cpArbiterUpdate; 0 for a new one.)
-        ctx.touchingPairs += 1
-        if contacts[0].bias < SOFT_YOUNG_AGE:
-            ctx.youngPairs += 1
-        if ctx.pairs[i].slot != NULL and c.arb == NULL:
-            ctx.pairs[i].slot.arbiter = arb    # new this step: next step's guess
+        arb = ctx.pairArbiters[i]
+        contacts = ctx.destinations[i]
+        if contacts != NULL and flags & SOFT_PAIR_ACCEPTED:
+            memcpy(contacts, c.contacts, (flags >> SOFT_PAIR_COUNT_SHIFT) * sizeof(cpContact))
+            arb.contacts = contacts
+        else:
+            arb.contacts = NULL
+            arb.count = 0
+            if contacts == NULL:
+                continue    # (out of memory: skipped, not stamped)
+            if arb.state != CP_ARBITER_STATE_IGNORE:
+                arb.state = CP_ARBITER_STATE_NORMAL
+        arb.stamp = stamp
 
 
 # -- the bodies' arbiter lists -----------------------------------------------------------
@@ -1840,6 +1939,7 @@ cdef enum:
     SOFT_TASK_UPDATE_SHAPES
     SOFT_TASK_GATHER
     SOFT_TASK_COUNT
+    SOFT_TASK_MOVE_CONTACTS
 
 cdef enum:
     SOFT_CHUNK_LANES = 32         # lanes of contacts per chunk
@@ -1901,6 +2001,8 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
         SoftGatherRange(ctx, begin, end)
     elif task == SOFT_TASK_COUNT:
         SoftCountRange(ctx, begin, end, flag)
+    elif task == SOFT_TASK_MOVE_CONTACTS:
+        SoftMoveContacts(ctx, begin, end)
 
 cdef void SoftTakeChunks(bint caller) noexcept nogil:
     # The caller takes chunks from the front, the worker from the back: in
@@ -1933,7 +2035,7 @@ cdef void SoftRun(SoftContext *ctx, int task, int begin, int end, bint flag) noe
     elif (task == SOFT_TASK_PREPARE or task == SOFT_TASK_STORE or task == SOFT_TASK_PACK
             or task == SOFT_TASK_COUNT):
         chunk = SOFT_CHUNK_CONTACTS
-    elif task == SOFT_TASK_NARROW:
+    elif task == SOFT_TASK_NARROW or task == SOFT_TASK_MOVE_CONTACTS:
         chunk = SOFT_CHUNK_PAIRS
     cdef int k
     if end <= begin:
