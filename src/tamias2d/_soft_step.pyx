@@ -404,6 +404,11 @@ cdef inline void SoftKeepSide(const cpSpace *space, const cpArbiter *arb,
     if n.x * info.n.x + n.y * info.n.y <= 0.0:
         info.n = n
 
+# How many pairs ahead the narrow phase fetches a pair's slot and shapes.
+cdef enum:
+    SOFT_NARROW_PREFETCH = 8
+    SOFT_ARBITER_PREFETCH = 8     # the same for the passes over the arbiters
+
 # What the narrow phase found of a pair (SoftContext.touching), so that the
 # serial pass after it reads one byte per pair, not the pair's candidate.
 cdef enum:
@@ -422,12 +427,21 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
     # when that guess is wrong (the answer is the same).
     cdef int i
     cdef SoftPair *p
+    cdef SoftPair *q
     cdef SoftCandidate *c
     cdef cpPairSlot *slot
     cdef cpFloat margin
     cdef const cpShape *pair[2]
     for i in range(begin, end):
         p = &ctx.pairs[i]
+        if i + SOFT_NARROW_PREFETCH < end:
+            # The broad phase's pair slots and the shapes are scattered in
+            # memory: a cache miss each, which stalled this loop more than
+            # the collision itself took.
+            q = &ctx.pairs[i + SOFT_NARROW_PREFETCH]
+            tamias_prefetch(q.slot)
+            tamias_prefetch(q.a)
+            tamias_prefetch(q.b)
         if cpSpaceRejectPair(ctx.space, p.a, p.b, &margin):
             ctx.touching[i] = 0
             continue
@@ -1060,6 +1074,9 @@ cdef void SoftCountRange(SoftContext *ctx, int begin, int end, bint atomic) noex
     cdef cpArbiter *arb
     cdef int i
     for i in range(begin, end):
+        if i + SOFT_ARBITER_PREFETCH < end:
+            # (Arbiters are scattered: a cache miss each otherwise.)
+            tamias_prefetch(arbiters.arr[i + SOFT_ARBITER_PREFETCH])
         arb = <cpArbiter *>arbiters.arr[i]
         if arb.count <= 0 or arb.contacts == NULL:
             tamias_store(&ctx.emptyArbiter, 1)
@@ -1085,6 +1102,12 @@ cdef void SoftPrepareContactRange(SoftContext *ctx, int begin, int end) noexcept
     cdef SoftState *sa
     cdef SoftState *sb
     for n in range(begin, end):
+        if n + SOFT_ARBITER_PREFETCH < end:
+            tamias_prefetch(arbiters.arr[ctx.contactSource[n + SOFT_ARBITER_PREFETCH]])
+        if n + SOFT_ARBITER_PREFETCH // 2 < end:
+            # Its contacts, now that the arbiter itself has been fetched.
+            tamias_prefetch((<cpArbiter *>arbiters.arr[
+                ctx.contactSource[n + SOFT_ARBITER_PREFETCH // 2]]).contacts)
         arb = <cpArbiter *>arbiters.arr[ctx.contactSource[n]]
         sc = &ctx.contacts[n]
         sc.arb = arb
@@ -1647,6 +1670,11 @@ cdef void SoftUnpackLanes(SoftContext *ctx, int begin, int end, bint store) noex
     for i in range(begin, end):
         ln = &ctx.lanes[i]
         links = &ctx.laneLinks[i]
+        if store and i + 1 < end:
+            # The next lane's arbiters' contacts (scattered in memory).
+            for k in range(SOFT_LANES):
+                if links[1].src[k] >= 0:
+                    tamias_prefetch(links[1].dst[k])
         for k in range(SOFT_LANES):
             if links.src[k] < 0:
                 continue
