@@ -145,6 +145,7 @@ cdef enum:
     SOFT_SCRATCH_CHANGED_IN   # the restitution pass that last changed each body
     SOFT_SCRATCH_DESTINATIONS # where each pair's contacts go in the contact buffers (SoftCollide)
     SOFT_SCRATCH_PAIR_ARBITERS  # each updated pair's arbiter, packed (SoftCollide)
+    SOFT_SCRATCH_LANE_CONTACTS  # the contact in each lane slot (SoftColorContacts)
     SOFT_SCRATCH_COUNT
 
 # (cpSoftScratch holds 20 buffers.)
@@ -223,7 +224,7 @@ cdef struct SoftContext:
     int colorLanes[SOFT_GRAPH_COLORS + 1]   # colour c: lanes[colorLanes[c]:colorLanes[c+1]]
     int *overflow             # SoftContact indices solved one by one
     volatile long shapesUpdated   # by SoftUpdateShapes
-    int *laneSlots            # contact i goes to lane laneSlots[i] // SOFT_LANES (-1: overflow)
+    int *laneContacts         # the contact in each lane slot (lane * SOFT_LANES + k; -1: none)
     SoftColorKey *colorKeys   # by SoftPrepareContactRange, for SoftColorContacts
     int overflowCount
     SoftPair *pairs           # this step's pairs from the broad phase (or the last walk's)
@@ -1305,36 +1306,51 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
                                               sizeof(SoftLaneLinks))
     if ctx.lanes == NULL or ctx.laneLinks == NULL:
         return 0
-    # Where each contact goes (here, in order); the copying into the lanes
-    # after, on the pool.
+    # Which contact goes in each lane slot (here, in order); the copying
+    # into the lanes after, on the pool, lane by lane: each lane is written
+    # whole while in cache (contact by contact, each contact's slot took a
+    # cache miss on each of the lane's lines). A colour's last lane of a
+    # kind may be part empty (-1).
+    ctx.laneContacts = <int *>_reserve(space, SOFT_SCRATCH_LANE_CONTACTS, total * SOFT_LANES,
+                                       sizeof(int))
+    if ctx.laneContacts == NULL:
+        return 0
+    memset(ctx.laneContacts, 0xff, <size_t>total * SOFT_LANES * sizeof(int))
     for i in range(n):
         c = color[i]
         if c == SOFT_GRAPH_COLORS:
-            color[i] = -1
             continue
         kind = ctx.colorKeys[i].kind
-        k = start[kind][c] * SOFT_LANES + fill[kind][c]
-        ctx.lanes[k // SOFT_LANES].points = kind + 1
-        color[i] = k
+        ctx.laneContacts[start[kind][c] * SOFT_LANES + fill[kind][c]] = i
         fill[kind][c] += 1
-    ctx.laneSlots = color
-    SoftRun(ctx, SOFT_TASK_PACK, 0, n, 0)
-    for c in range(SOFT_GRAPH_COLORS):
-        for kind in range(2):
-            # The last lane of a kind may be part empty.
-            if fill[kind][c] % SOFT_LANES != 0:
-                i = start[kind][c] + fill[kind][c] // SOFT_LANES
-                for k in range(fill[kind][c] % SOFT_LANES, SOFT_LANES):
-                    SoftLanesClear(&ctx.lanes[i], &ctx.laneLinks[i], k)
+    SoftRun(ctx, SOFT_TASK_PACK, 0, total, 0)
     return 1
 
 cdef void SoftPackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
-    cdef int i, slot
-    for i in range(begin, end):
-        slot = ctx.laneSlots[i]
-        if slot >= 0:
-            SoftPackLane(ctx, &ctx.lanes[slot // SOFT_LANES], &ctx.laneLinks[slot // SOFT_LANES],
-                         slot % SOFT_LANES, i)
+    # Lanes begin to end, from their contacts (laneContacts).
+    cdef int lane, k, i
+    cdef const int *slots
+    cdef SoftContact *sc
+    for lane in range(begin, end):
+        slots = &ctx.laneContacts[lane * SOFT_LANES]
+        if lane + 1 < end:
+            # The next lane's contacts, scattered (the lines the packing reads).
+            for k in range(SOFT_LANES):
+                if slots[SOFT_LANES + k] >= 0:
+                    sc = &ctx.contacts[slots[SOFT_LANES + k]]
+                    tamias_prefetch(sc)
+                    tamias_prefetch(<char *>sc + 64)
+                    tamias_prefetch(<char *>sc + 128)
+                    tamias_prefetch(<char *>sc + 192)
+                    tamias_prefetch(<char *>sc + 256)
+        # (Slot 0 of a lane is never empty.)
+        ctx.lanes[lane].points = ctx.colorKeys[slots[0]].kind + 1
+        for k in range(SOFT_LANES):
+            i = slots[k]
+            if i >= 0:
+                SoftPackLane(ctx, &ctx.lanes[lane], &ctx.laneLinks[lane], k, i)
+            else:
+                SoftLanesClear(&ctx.lanes[lane], &ctx.laneLinks[lane], k)
 
 cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, SoftLaneLinks *links, int k,
                        int i) noexcept nogil:
@@ -2060,7 +2076,7 @@ cdef void SoftRun(SoftContext *ctx, int task, int begin, int end, bint flag) noe
     if (task <= SOFT_TASK_INTEGRATE_POSITIONS or task == SOFT_TASK_FINISH_BODIES
             or task == SOFT_TASK_UPDATE_SHAPES or task == SOFT_TASK_GATHER):
         chunk = SOFT_CHUNK_BODIES
-    elif (task == SOFT_TASK_PREPARE or task == SOFT_TASK_STORE or task == SOFT_TASK_PACK
+    elif (task == SOFT_TASK_PREPARE or task == SOFT_TASK_STORE
             or task == SOFT_TASK_COUNT):
         chunk = SOFT_CHUNK_CONTACTS
     elif task == SOFT_TASK_NARROW or task == SOFT_TASK_MOVE_CONTACTS:
