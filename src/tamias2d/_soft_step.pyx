@@ -429,6 +429,7 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef int i
     cdef SoftPair *p
     cdef SoftPair *q
+    cdef cpArbiter *guess
     cdef SoftCandidate *c
     cdef cpPairSlot *slot
     cdef cpFloat margin
@@ -443,6 +444,15 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
             tamias_prefetch(q.slot)
             tamias_prefetch(q.a)
             tamias_prefetch(q.b)
+        if i + SOFT_NARROW_PREFETCH // 2 < end:
+            # The arbiter its slot guesses, now that the slot has arrived.
+            q = &ctx.pairs[i + SOFT_NARROW_PREFETCH // 2]
+            if q.slot != NULL and q.slot.arbiter != NULL:
+                # (Its shapes, count and flags lie on different lines.)
+                guess = <cpArbiter *>q.slot.arbiter
+                tamias_prefetch(guess)
+                tamias_prefetch(&guess.count)
+                tamias_prefetch(&guess.cached)
         if cpSpaceRejectPair(ctx.space, p.a, p.b, &margin):
             ctx.touching[i] = 0
             continue
@@ -454,7 +464,6 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
         if slot != NULL:
             c.id = slot.id
             c.guess = <cpArbiter *>slot.arbiter
-            tamias_prefetch(c.guess)
         else:
             c.id = 0
             c.guess = NULL
