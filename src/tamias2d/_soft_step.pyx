@@ -1379,6 +1379,8 @@ cdef void SoftPackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
                     tamias_prefetch(<char *>sc + 128)
                     tamias_prefetch(<char *>sc + 192)
                     tamias_prefetch(<char *>sc + 256)
+                    tamias_prefetch(<char *>sc + 320)
+                    tamias_prefetch(<char *>sc + 384)
         # (Slot 0 of a lane is never empty.)
         ctx.lanes[lane].points = ctx.colorKeys[slots[0]].kind + 1
         for k in range(SOFT_LANES):
