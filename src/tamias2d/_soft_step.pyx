@@ -65,8 +65,9 @@ from tamias2d._bbtree cimport (cpBBTreeReindexQuerySlots, cpPairSlot, cpBBTreeGe
 from tamias2d.collision cimport (cpCollideSoft, CollisionDiagnostics, cpCollisionTakeDiagnostics,
     cpCollisionPutDiagnostics)
 from tamias2d._config cimport (cpCollisionID, cpHashValue, CP_MAX_CONTACTS_PER_ARBITER,
-    CP_HASH_PAIR, tamias_prefetch, tamias_lowest_bit)
-from tamias2d._structs cimport cpCollisionInfo, cpHashSet, cpSegmentShape, CP_SEGMENT_SHAPE
+    CP_HASH_PAIR, tamias_prefetch, tamias_lowest_bit, CP_POLY_SHAPE_INLINE_ALLOC)
+from tamias2d._structs cimport (cpCollisionInfo, cpHashSet, cpSegmentShape, CP_SEGMENT_SHAPE,
+    cpPolyShape, cpSplittingPlane)
 from libc.string cimport memcpy
 
 
@@ -420,13 +421,21 @@ cdef enum:
     SOFT_PAIR_YOUNG = 8       # ... and its first point is under SOFT_YOUNG_AGE steps old
     SOFT_PAIR_COUNT_SHIFT = 4 # bits 4-5: its number of contacts
 
-cdef inline void SoftFetchShape(const cpShape *shape) noexcept nogil:
-    # A shape's lines that the narrow phase reads: its box and filter, and
-    # a polygon's world vertices and normals after them (a box's end at
-    # about 350 bytes; prefetching past a smaller shape is harmless).
+cdef inline void SoftFetchLines(const void *p, int size) noexcept nogil:
+    # Every cache line of `size` bytes from p (p need not be aligned, so one
+    # line more). For records scattered in memory, fetched a few items
+    # ahead of the pass that reads them; prefetching an address past an
+    # object is harmless.
     cdef int k
-    for k in range(0, 384, 64):
-        tamias_prefetch(<const char *>shape + k)
+    for k in range(0, size + 64, 64):
+        tamias_prefetch(<const char *>p + k)
+
+cdef inline void SoftFetchShape(const cpShape *shape) noexcept nogil:
+    # What the narrow phase reads of a shape: its box and filter, and an
+    # inline polygon's world planes after them (not the local half of its
+    # planes; a smaller shape's lines past its end are harmless).
+    SoftFetchLines(shape, sizeof(cpPolyShape)
+                   - CP_POLY_SHAPE_INLINE_ALLOC * sizeof(cpSplittingPlane))
 
 cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
     # First the cheap rejection (most pairs of the broad phase, whose boxes
@@ -813,15 +822,6 @@ cdef inline void SoftGatherMotion(SoftContext *ctx, int i, const cpBody *body) n
     mo.py = body.p.y
     mo.a = body.a
 
-cdef inline void SoftFetchBody(const cpBody *body) noexcept nogil:
-    # The lines of a body that the gathering and the finish read and write
-    # (bodies are scattered: each lives in its Python object).
-    tamias_prefetch(body)
-    tamias_prefetch(<const char *>body + 64)
-    tamias_prefetch(<const char *>body + 128)
-    tamias_prefetch(<const char *>body + 192)
-    tamias_prefetch(<const char *>body + 256)
-
 cdef void SoftGatherRange(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef cpArray *arr = ctx.space.dynamicBodies
     cdef int i
@@ -830,7 +830,8 @@ cdef void SoftGatherRange(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef cpBody *body
     for i in range(begin, end):
         if i + SOFT_BODY_PREFETCH < end:
-            SoftFetchBody(<cpBody *>arr.arr[i - 1 + SOFT_BODY_PREFETCH])
+            # (Each body lives in its Python object, scattered.)
+            SoftFetchLines(arr.arr[i - 1 + SOFT_BODY_PREFETCH], sizeof(cpBody))
         body = <cpBody *>arr.arr[i - 1]
         body.solverIndex = i
         SoftGatherMotion(ctx, i, body)
@@ -1099,13 +1100,6 @@ cdef inline void SoftCountContact(SoftContext *ctx, cpArbiter *arb, bint atomic)
         if ib != 0:
             ctx.bodies[ib].contacts += 1
 
-cdef inline void SoftFetchArbiter(const cpArbiter *arb) noexcept nogil:
-    # All of an arbiter's lines (its fields span four; it is not aligned).
-    tamias_prefetch(arb)
-    tamias_prefetch(<const char *>arb + 64)
-    tamias_prefetch(<const char *>arb + 128)
-    tamias_prefetch(<const char *>arb + 192)
-
 cdef void SoftCountRange(SoftContext *ctx, int begin, int end, bint atomic) noexcept nogil:
     cdef cpArray *arbiters = ctx.space.arbiters
     cdef cpArbiter *arb
@@ -1113,7 +1107,7 @@ cdef void SoftCountRange(SoftContext *ctx, int begin, int end, bint atomic) noex
     for i in range(begin, end):
         if i + SOFT_ARBITER_PREFETCH < end:
             # (Arbiters are scattered: a cache miss each otherwise.)
-            SoftFetchArbiter(<cpArbiter *>arbiters.arr[i + SOFT_ARBITER_PREFETCH])
+            SoftFetchLines(arbiters.arr[i + SOFT_ARBITER_PREFETCH], sizeof(cpArbiter))
         arb = <cpArbiter *>arbiters.arr[i]
         if arb.count <= 0 or arb.contacts == NULL:
             tamias_store(&ctx.emptyArbiter, 1)
@@ -1140,7 +1134,8 @@ cdef void SoftPrepareContactRange(SoftContext *ctx, int begin, int end) noexcept
     cdef SoftState *sb
     for n in range(begin, end):
         if n + SOFT_ARBITER_PREFETCH < end:
-            SoftFetchArbiter(<cpArbiter *>arbiters.arr[ctx.contactSource[n + SOFT_ARBITER_PREFETCH]])
+            SoftFetchLines(arbiters.arr[ctx.contactSource[n + SOFT_ARBITER_PREFETCH]],
+                           sizeof(cpArbiter))
         if n + SOFT_ARBITER_PREFETCH // 2 < end:
             # Its contacts, now that the arbiter itself has been fetched.
             tamias_prefetch((<cpArbiter *>arbiters.arr[
@@ -1284,7 +1279,7 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
     # colour of a pair is the lowest bit clear in both: no search.
     cdef cpSpace *space = ctx.space
     cdef int n = ctx.contactCount
-    cdef int i, c, col, a, b, k, total
+    cdef int i, c, col, a, b, total
     cdef uint32_t *used          # per body slot: the colours it is in
     cdef uint32_t taken, bit
     cdef int *color
@@ -1366,21 +1361,13 @@ cdef void SoftPackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
     # Lanes begin to end, from their contacts (laneContacts).
     cdef int lane, k, i
     cdef const int *slots
-    cdef SoftContact *sc
     for lane in range(begin, end):
         slots = &ctx.laneContacts[lane * SOFT_LANES]
         if lane + 1 < end:
             # The next lane's contacts, scattered (the lines the packing reads).
             for k in range(SOFT_LANES):
                 if slots[SOFT_LANES + k] >= 0:
-                    sc = &ctx.contacts[slots[SOFT_LANES + k]]
-                    tamias_prefetch(sc)
-                    tamias_prefetch(<char *>sc + 64)
-                    tamias_prefetch(<char *>sc + 128)
-                    tamias_prefetch(<char *>sc + 192)
-                    tamias_prefetch(<char *>sc + 256)
-                    tamias_prefetch(<char *>sc + 320)
-                    tamias_prefetch(<char *>sc + 384)
+                    SoftFetchLines(&ctx.contacts[slots[SOFT_LANES + k]], sizeof(SoftContact))
         # (Slot 0 of a lane is never empty.)
         ctx.lanes[lane].points = ctx.colorKeys[slots[0]].kind + 1
         for k in range(SOFT_LANES):
@@ -1977,7 +1964,7 @@ cdef void SoftFinishBodies(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef cpBody *body
     for i in range(begin, end):
         if i + SOFT_BODY_PREFETCH < end:
-            SoftFetchBody(ctx.bodies[i + SOFT_BODY_PREFETCH].body)
+            SoftFetchLines(ctx.bodies[i + SOFT_BODY_PREFETCH].body, sizeof(cpBody))
         sb = &ctx.bodies[i]
         st = &ctx.states[i]
         body = sb.body
