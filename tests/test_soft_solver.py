@@ -754,6 +754,61 @@ def test_pyramid_comes_to_rest():
     assert max(energies) < 1e-6
 
 
+def _crowded_plate(elasticity=0.0):
+    # A dynamic plate on the ground with 40 boxes side by side on it: the
+    # plate is in 41 contacts, more than the graph's 24 colours, so some of
+    # them are solved one by one, outside the lanes.
+    s = soft_space()
+    s.gravity = 0, -10
+    ground = tamias2d.Segment(s.static_body, (-100, 0), (100, 0), 0.0)
+    ground.friction = 1.0
+    s.add(ground)
+    plate = tamias2d.Body(40.0, tamias2d.moment_for_box(40.0, (80, 1)))
+    plate.position = 0, 0.5
+    shape = tamias2d.Poly.create_box(plate, (80, 1))
+    shape.friction = 1.0
+    shape.elasticity = elasticity
+    s.add(plate, shape)
+    boxes = []
+    for i in range(40):
+        b = tamias2d.Body(1.0, tamias2d.moment_for_box(1.0, (1, 1)))
+        b.position = -39 + 2 * i, 1.5
+        box = tamias2d.Poly.create_box(b, (1, 1))
+        box.friction = 0.5
+        box.elasticity = elasticity
+        s.add(b, box)
+        boxes.append(b)
+    return s, plate, boxes
+
+
+@pytest.mark.parametrize("elasticity", [0.0, 0.5])
+def test_contacts_beyond_the_colours_hold(elasticity):
+    # Criteria: the plate and the boxes rest where they were built (within
+    # 0.01 of a box), still, and the ground carries the whole weight (the
+    # step's impulse within 1% of 80 x 10 dt); two threads give the same bits.
+    from tamias2d import _soft_step
+    before = _soft_step._overflow_count()
+    s, plate, boxes = _crowded_plate(elasticity)
+    for _ in range(120):
+        s.step(DT)
+    assert _soft_step._overflow_count() - before >= 120 * (41 - 24)
+    assert abs(plate.position.y - 0.5) < 0.01
+    for b in boxes:
+        assert abs(b.position.y - 1.5) < 0.01
+        assert abs(b.velocity.y) < 0.01
+    carried = []
+    plate.each_arbiter(lambda arb: carried.append(arb.total_impulse.y)
+                       if s.static_body in (arb.shapes[0].body, arb.shapes[1].body) else None)
+    assert abs(abs(sum(carried)) - 80 * 10 * DT) < 0.01 * 80 * 10 * DT
+    t, _, _ = _crowded_plate(elasticity)
+    t.threaded = True
+    t.threads = 2
+    for _ in range(120):
+        t.step(DT)
+    assert [tuple(b.position) + (b.angle,) for b in s.bodies] == \
+        [tuple(b.position) + (b.angle,) for b in t.bodies]
+
+
 @pytest.mark.parametrize("scale", [1e-3, 1e3])
 def test_scaled_scene_behaves_the_same(scale):
     # lengths, gravity and collision_slop scaled: the soft settings follow

@@ -17,12 +17,14 @@
 #   SoftGatherBodies        * awake bodies into SoftBody / SoftState / SoftMotion
 #                           arrays (velocity; acceleration and position)
 #   SoftPrepareJoints       joint pre-solve callbacks, warm-start rescale
-#   SoftPrepareContacts     * each body's contact count; * arbiters into a
-#                           contiguous SoftContact array;
-#                           each point's softness for its load
-#                           (SoftPointSoftness), the 2x2 block matrices
-#   SoftColorContacts       the constraint graph's colours; each colour's
-#                           contacts into SoftLanes (_soft_lanes.h)
+#   SoftPrepareContacts     * each body's contact count, each contact's
+#                           bodies and colouring key (SoftCountRange)
+#   SoftColorContacts       the constraint graph's colours; which contact
+#                           goes in which slot of SoftLanes (_soft_lanes.h)
+#   SoftPrepareLanes        * each coloured contact prepared (SoftPrepareContact:
+#                           each point's softness for its load, the 2x2
+#                           block matrices) straight into its lane slot; the
+#                           others into a SoftContact array
 #   per substep (h = dt / substeps), colour by colour for the contacts:
 #     SoftIntegrateVelocities  * gravity, damping, forces, velocity_func
 #     SoftWarmStart            last substep's impulses (joints, * contacts)

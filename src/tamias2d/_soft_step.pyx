@@ -203,11 +203,16 @@ cdef struct SoftCandidate:
 
 # What the colouring needs of a contact, packed (it reads them in order,
 # one after the other): its movable bodies' slots (0: immovable) and its
-# lane kind (points - 1; -1: solved one by one, in the overflow).
+# lane kind (points - 1; -1: solved one by one, in the overflow). Beside
+# them, for its preparation, its bodies' slots and its size, found by the
+# count in arbiter order (where the shapes' boxes can be fetched ahead).
 cdef struct SoftColorKey:
     int a
     int b
     int kind
+    int ia
+    int ib
+    cpFloat size              # SoftContactSize
 
 cdef struct SoftContext:
     cpSpace *space
@@ -226,7 +231,7 @@ cdef struct SoftContext:
     int *overflow             # SoftContact indices solved one by one
     volatile long shapesUpdated   # by SoftUpdateShapes
     int *laneContacts         # the contact in each lane slot (lane * SOFT_LANES + k; -1: none)
-    SoftColorKey *colorKeys   # by SoftPrepareContactRange, for SoftColorContacts
+    SoftColorKey *colorKeys   # by SoftCountRange, for SoftColorContacts and the preparation
     int overflowCount
     SoftPair *pairs           # this step's pairs from the broad phase (or the last walk's)
     int pairCount
@@ -237,7 +242,7 @@ cdef struct SoftContext:
     cpArbiter **pairArbiters  # ... and each updated pair's arbiter (the candidate's, packed)
     bint updateInNarrow       # no begin or pre-solve callbacks: arbiters updated in parallel
     bint keepingPairs         # the broad phase's walk is being kept (SoftCollectPair)
-    volatile long elastic     # a contact has restitution (set by SoftPrepareContactRange)
+    volatile long elastic     # a contact has restitution (set by SoftCountRange)
     volatile long customVelocity  # a body has its own velocity_func (SoftGatherRange)
     volatile long customPosition  # ... position_func
     volatile long emptyArbiter    # an arbiter has no contacts (SoftCountRange)
@@ -283,8 +288,8 @@ cdef enum:
     SOFT_STAGE_NARROW_PHASE       # contacts of each pair, cached arbiters found
     SOFT_STAGE_ARBITERS           # arbiters updated or made, begin / pre_solve
     SOFT_STAGE_COMPONENTS         # contact graph, sleeping, the arbiter cache's filter
-    SOFT_STAGE_PREPARE            # bodies, joints and contacts gathered and prepared
-    SOFT_STAGE_COLOR              # the constraint graph's colours, contacts into lanes
+    SOFT_STAGE_PREPARE            # bodies, joints and contacts gathered; contacts prepared into lanes
+    SOFT_STAGE_COLOR              # the constraint graph's colours (which lane slot each contact takes)
     SOFT_STAGE_INTEGRATE          # velocities and positions, every substep
     SOFT_STAGE_WARM_START
     SOFT_STAGE_SOLVE              # the biased (soft) pass
@@ -372,6 +377,8 @@ cdef bint _use_guesses = 1
 cdef bint _keep_pairs = 1
 # Steps whose walk was kept, in all spaces (for tests: that it happens).
 cdef volatile long _kept_walks = 0
+# Contacts solved one by one so far, outside the colours (for tests).
+cdef volatile long _overflow_total = 0
 # The same for the bodies' arbiter lists (SoftResetArbiters).
 cdef bint _keep_threads = 1
 cdef volatile long _kept_threads = 0
@@ -981,16 +988,24 @@ cdef void SoftFinishJoints(SoftContext *ctx) noexcept nogil:
 
 # -- contacts ------------------------------------------------------------------------------
 
-cdef inline cpFloat SoftShapeSize(cpShape *shape) noexcept nogil:
+cdef inline cpFloat SoftShapeSize(const cpShape *shape, const SoftBody *body) noexcept nogil:
     # The smaller side of the bounding box of a movable body's shape; 0 for
-    # an immovable one (a ground segment's thickness says nothing).
-    if shape.body.m_inv == 0.0 and shape.body.i_inv == 0.0:
+    # an immovable one (a ground segment's thickness says nothing). The
+    # body's masses from its slot (the same numbers), or for slot 0 from
+    # the body (static or asleep): the shapes' bodies stay out of cache.
+    cdef cpFloat m_inv = body.m_inv
+    cdef cpFloat i_inv = body.i_inv
+    if body.body == NULL:
+        m_inv = shape.body.m_inv
+        i_inv = shape.body.i_inv
+    if m_inv == 0.0 and i_inv == 0.0:
         return 0.0
     return fmin(shape.bb.r - shape.bb.l, shape.bb.t - shape.bb.b)
 
-cdef inline cpFloat SoftContactSize(cpArbiter *arb) noexcept nogil:
-    cdef cpFloat sa = SoftShapeSize(arb.a)
-    cdef cpFloat sb = SoftShapeSize(arb.b)
+cdef inline cpFloat SoftContactSize(const cpArbiter *arb, const SoftBody *a,
+                                    const SoftBody *b) noexcept nogil:
+    cdef cpFloat sa = SoftShapeSize(arb.a, a)
+    cdef cpFloat sb = SoftShapeSize(arb.b, b)
     if sa == 0.0:
         return sb
     if sb == 0.0:
@@ -1048,8 +1063,11 @@ cdef inline void SoftPointSoftness(SoftPoint *sp, SoftSoftness *base, cpFloat lo
 
 
 cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
-    # The arbiters with contacts, in order, become ctx.contacts (prepared by
-    # SoftPrepareContactRange, on the pool when the step is threaded).
+    # The arbiters with contacts, in order, become the step's contacts:
+    # here each one's bodies' slots and colouring key are found (and the
+    # bodies' contact counts), on the pool when the step is threaded. They
+    # are prepared after the colouring, straight into their lanes
+    # (SoftPrepareLanes).
     cdef cpSpace *space = ctx.space
     cdef cpArray *arbiters = space.arbiters
     cdef int i, n = 0
@@ -1077,18 +1095,50 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
             if arb.count <= 0 or arb.contacts == NULL:
                 continue
             ctx.contactSource[n] = i
+            SoftCountContact(ctx, arb, n, 0)
             n += 1
-            SoftCountContact(ctx, arb, 0)
     else:
         n = arbiters.num
     ctx.contactCount = n
-    SoftRun(ctx, SOFT_TASK_PREPARE, 0, n, 0)
     return 1
 
-cdef inline void SoftCountContact(SoftContext *ctx, cpArbiter *arb, bint atomic) noexcept nogil:
-    # (Slot 0's count is never read.)
+cdef inline int SoftContactKind(const cpArbiter *arb, const SoftBody *a,
+                                const SoftBody *b) noexcept nogil:
+    # Its lane kind (SoftColorKey.kind) as its preparation will find it, by
+    # the same arithmetic: one point with a normal mass, or two whose rows
+    # can be solved together (SoftPrepareBlock); -1 otherwise.
+    cdef const cpContact *con = arb.contacts
+    cdef cpFloat nx = arb.n.x
+    cdef cpFloat ny = arb.n.y
+    cdef cpFloat mm = a.m_inv + b.m_inv
+    cdef cpFloat rnA1 = con[0].r1.x * ny - con[0].r1.y * nx
+    cdef cpFloat rnB1 = con[0].r2.x * ny - con[0].r2.y * nx
+    cdef cpFloat rnA2, rnB2, k11, k22, k12
+    k11 = mm + a.i_inv * rnA1 * rnA1 + b.i_inv * rnB1 * rnB1
+    if arb.count == 1:
+        return 0 if k11 > 0.0 else -1
+    rnA2 = con[1].r1.x * ny - con[1].r1.y * nx
+    rnB2 = con[1].r2.x * ny - con[1].r2.y * nx
+    k22 = mm + a.i_inv * rnA2 * rnA2 + b.i_inv * rnB2 * rnB2
+    k12 = mm + a.i_inv * rnA1 * rnA2 + b.i_inv * rnB1 * rnB2
+    if k11 > 0.0 and k22 > 0.0 and k11 * k11 < SOFT_BLOCK_MAX_CONDITION * (k11 * k22 - k12 * k12):
+        return 1
+    return -1
+
+cdef inline void SoftCountContact(SoftContext *ctx, cpArbiter *arb, int n, bint atomic) noexcept nogil:
+    # Contact n (of arbiter arb): its key, whether it bounces, and its
+    # bodies' counts. (Slot 0's count is never read.)
+    cdef SoftColorKey *key = &ctx.colorKeys[n]
     cdef int ia = SoftIndex(arb.body_a, ctx.bodies, ctx.bodyCount)
     cdef int ib = SoftIndex(arb.body_b, ctx.bodies, ctx.bodyCount)
+    key.ia = ia
+    key.ib = ib
+    key.a = ia if SoftMovable(ctx, ia) else 0
+    key.b = ib if SoftMovable(ctx, ib) else 0
+    key.kind = SoftContactKind(arb, &ctx.bodies[ia], &ctx.bodies[ib])
+    key.size = SoftContactSize(arb, &ctx.bodies[ia], &ctx.bodies[ib])
+    if arb.e != 0.0:
+        tamias_store(&ctx.elastic, 1)
     if atomic:
         if ia != 0:
             tamias_add_int(&ctx.bodies[ia].contacts, 1)
@@ -1108,132 +1158,133 @@ cdef void SoftCountRange(SoftContext *ctx, int begin, int end, bint atomic) noex
         if i + SOFT_ARBITER_PREFETCH < end:
             # (Arbiters are scattered: a cache miss each otherwise.)
             SoftFetchLines(arbiters.arr[i + SOFT_ARBITER_PREFETCH], sizeof(cpArbiter))
+        if i + SOFT_ARBITER_PREFETCH // 2 < end:
+            # Its contacts and shapes' boxes, now that the arbiter itself
+            # has been fetched.
+            arb = <cpArbiter *>arbiters.arr[i + SOFT_ARBITER_PREFETCH // 2]
+            tamias_prefetch(arb.contacts)
+            tamias_prefetch(&arb.a.bb)
+            tamias_prefetch(&arb.b.bb)
         arb = <cpArbiter *>arbiters.arr[i]
         if arb.count <= 0 or arb.contacts == NULL:
             tamias_store(&ctx.emptyArbiter, 1)
             continue
         ctx.contactSource[i] = i
-        SoftCountContact(ctx, arb, atomic)
+        SoftCountContact(ctx, arb, i, atomic)
 
-cdef void SoftPrepareContactRange(SoftContext *ctx, int begin, int end) noexcept nogil:
-    cdef cpArray *arbiters = ctx.space.arbiters
-    cdef SoftColorKey *key
-    cdef int i, j, n
-    cdef cpArbiter *arb
+cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept nogil:
+    # Contact n into *sc: its points' arms, masses, softness, separation and
+    # warm start, and Chipmunk's fields of its cpContacts.
+    cdef cpArbiter *arb = <cpArbiter *>ctx.space.arbiters.arr[ctx.contactSource[n]]
+    cdef SoftColorKey *key = &ctx.colorKeys[n]
+    cdef int j
     cdef cpContact *con
-    cdef SoftContact *sc
     cdef SoftPoint *sp
     cdef SoftBody *a
     cdef SoftBody *b
     cdef SoftSoftness soft
     cdef cpFloat nx, ny, rnA, rnB, rtA, rtB, kN, kT, sep, warm, size, load
-    cdef cpFloat maxStiffening, preloadFraction, age, smoothing
-    cdef cpFloat warmCoef = ctx.warmCoef
-    cdef cpFloat loadCoef = ctx.loadCoef
+    cdef cpFloat maxStiffening, preloadFraction, age, smoothing, pax, pay, pbx, pby
     cdef SoftState *sa
     cdef SoftState *sb
-    for n in range(begin, end):
-        if n + SOFT_ARBITER_PREFETCH < end:
-            SoftFetchLines(arbiters.arr[ctx.contactSource[n + SOFT_ARBITER_PREFETCH]],
-                           sizeof(cpArbiter))
-        if n + SOFT_ARBITER_PREFETCH // 2 < end:
-            # Its contacts, now that the arbiter itself has been fetched.
-            tamias_prefetch((<cpArbiter *>arbiters.arr[
-                ctx.contactSource[n + SOFT_ARBITER_PREFETCH // 2]]).contacts)
-        arb = <cpArbiter *>arbiters.arr[ctx.contactSource[n]]
-        sc = &ctx.contacts[n]
-        sc.arb = arb
-        sc.ia = SoftIndex(arb.body_a, ctx.bodies, ctx.bodyCount)
-        sc.ib = SoftIndex(arb.body_b, ctx.bodies, ctx.bodyCount)
-        a = &ctx.bodies[sc.ia]
-        b = &ctx.bodies[sc.ib]
-        sa = &ctx.states[sc.ia]
-        sb = &ctx.states[sc.ib]
-        sc.count = arb.count if arb.count <= 2 else 2
-        sc.dst = arb.contacts
-        size = SoftContactSize(arb)
-        preloadFraction = SoftPreload(a, b, &maxStiffening)
-        nx = arb.n.x
-        ny = arb.n.y
-        sc.nx = nx
-        sc.ny = ny
-        sc.friction = arb.u
-        sc.restitution = arb.e
-        if arb.e != 0.0:
-            tamias_store(&ctx.elastic, 1)
-        # Chipmunk adds surface_vr to the relative velocity; only its
-        # tangential part is used for friction.
-        sc.surfaceT = -arb.surface_vr.x * ny + arb.surface_vr.y * nx
-        soft = (ctx.staticSoft if (a.m_inv == 0.0 and a.i_inv == 0.0)
-                or (b.m_inv == 0.0 and b.i_inv == 0.0) else ctx.contactSoft)
-        sc.block = 0
-        # Chipmunk skips the warm start of an arbiter's first step.
-        warm = 0.0 if arb.state == CP_ARBITER_STATE_FIRST_COLLISION else warmCoef
-        for j in range(sc.count):
-            con = &arb.contacts[j]
-            sp = &sc.p[j]
-            sp.rAx = con.r1.x
-            sp.rAy = con.r1.y
-            sp.rBx = con.r2.x
-            sp.rBy = con.r2.y
-            rnA = sp.rAx * ny - sp.rAy * nx
-            rnB = sp.rBx * ny - sp.rBy * nx
-            sp.rnA = rnA
-            sp.rnB = rnB
-            kN = a.m_inv + b.m_inv + a.i_inv * rnA * rnA + b.i_inv * rnB * rnB
-            # tangent t = perp(n) = (-ny, nx): cross(r, t) = r . n
-            rtA = sp.rAx * nx + sp.rAy * ny
-            rtB = sp.rBx * nx + sp.rBy * ny
-            sp.rtA = rtA
-            sp.rtB = rtB
-            kT = a.m_inv + b.m_inv + a.i_inv * rtA * rtA + b.i_inv * rtB * rtB
-            sp.normalMass = 1.0 / kN if kN > 0.0 else 0.0
-            sp.tangentMass = 1.0 / kT if kT > 0.0 else 0.0
-            # The load that sets the point's stiffness follows the impulses
-            # slowly (con.jBias, unused by this solver, carries it between
-            # steps): following every spike and dip makes a loaded stack
-            # breathe and a big pyramid shake itself apart.
-            # A young point (con.bias counts its steps) averages the loads it
-            # has seen, so a scene that starts at rest is stiff within a few
-            # steps instead of sagging while the filter catches up.
-            age = con.bias if con.bias >= 0.0 else 0.0
-            if age > SOFT_LOAD_AGE:
-                age = SOFT_LOAD_AGE
-            smoothing = 1.0 / age if age >= 1.0 else 1.0
-            if smoothing < SOFT_LOAD_SMOOTHING:
-                smoothing = SOFT_LOAD_SMOOTHING
-            load = con.jBias + smoothing * (con.jnAcc * loadCoef - con.jBias)
-            if warm == 0.0:
-                load = 0.0
-                age = 0.0
-            SoftPointSoftness(sp, &soft, load, size, maxStiffening, ctx.h)
-            # The load as a substep's impulse (jnAcc is the step's).
-            sp.preload = load * ctx.h * preloadFraction
-            # Separation now, less the anchors' part, which the solver adds
-            # back from the bodies' motion within the step.
-            sep = ((sp.rBx - sp.rAx + arb.body_b.p.x - arb.body_a.p.x) * nx
-                   + (sp.rBy - sp.rAy + arb.body_b.p.y - arb.body_a.p.y) * ny)
-            sp.baseSeparation = sep - ((sp.rBx - sp.rAx) * nx + (sp.rBy - sp.rAy) * ny)
-            sp.relativeVelocity = ((sb.vx - sb.w * sp.rBy - sa.vx + sa.w * sp.rAy) * nx
-                                   + (sb.vy + sb.w * sp.rBx - sa.vy - sa.w * sp.rAx) * ny)
-            sp.normalImpulse = con.jnAcc * warm
-            sp.tangentImpulse = con.jtAcc * warm
-            sp.totalNormal = 0.0
-            sp.totalTangent = 0.0
-            sp.maxNormalImpulse = 0.0
-            # Chipmunk's fields, for Arbiter.total_ke and the like.
-            con.nMass = sp.normalMass
-            con.tMass = sp.tangentMass
-            con.bias = age + 1.0
-            con.jBias = load
-            con.bounce = sp.relativeVelocity * arb.e
-        if sc.count == 2:
-            SoftPrepareBlock(sc, a, b)
-        key = &ctx.colorKeys[n]
-        key.a = sc.ia if SoftMovable(ctx, sc.ia) else 0
-        key.b = sc.ib if SoftMovable(ctx, sc.ib) else 0
-        key.kind = (sc.count - 1 if sc.block or (sc.count == 1 and sc.p[0].normalMass > 0.0)
-                    else -1)
+    sc.arb = arb
+    sc.ia = key.ia
+    sc.ib = key.ib
+    a = &ctx.bodies[sc.ia]
+    b = &ctx.bodies[sc.ib]
+    sa = &ctx.states[sc.ia]
+    sb = &ctx.states[sc.ib]
+    sc.count = arb.count if arb.count <= 2 else 2
+    sc.dst = arb.contacts
+    # The bodies' positions as gathered (slot 0's from the body: static or
+    # asleep), so that the bodies themselves are not read here.
+    if sc.ia != 0:
+        pax = ctx.motion[sc.ia].px
+        pay = ctx.motion[sc.ia].py
+    else:
+        pax = arb.body_a.p.x
+        pay = arb.body_a.p.y
+    if sc.ib != 0:
+        pbx = ctx.motion[sc.ib].px
+        pby = ctx.motion[sc.ib].py
+    else:
+        pbx = arb.body_b.p.x
+        pby = arb.body_b.p.y
+    size = key.size
+    preloadFraction = SoftPreload(a, b, &maxStiffening)
+    nx = arb.n.x
+    ny = arb.n.y
+    sc.nx = nx
+    sc.ny = ny
+    sc.friction = arb.u
+    sc.restitution = arb.e
+    # Chipmunk adds surface_vr to the relative velocity; only its
+    # tangential part is used for friction.
+    sc.surfaceT = -arb.surface_vr.x * ny + arb.surface_vr.y * nx
+    soft = (ctx.staticSoft if (a.m_inv == 0.0 and a.i_inv == 0.0)
+            or (b.m_inv == 0.0 and b.i_inv == 0.0) else ctx.contactSoft)
+    sc.block = 0
+    # Chipmunk skips the warm start of an arbiter's first step.
+    warm = 0.0 if arb.state == CP_ARBITER_STATE_FIRST_COLLISION else ctx.warmCoef
+    for j in range(sc.count):
+        con = &arb.contacts[j]
+        sp = &sc.p[j]
+        sp.rAx = con.r1.x
+        sp.rAy = con.r1.y
+        sp.rBx = con.r2.x
+        sp.rBy = con.r2.y
+        rnA = sp.rAx * ny - sp.rAy * nx
+        rnB = sp.rBx * ny - sp.rBy * nx
+        sp.rnA = rnA
+        sp.rnB = rnB
+        kN = a.m_inv + b.m_inv + a.i_inv * rnA * rnA + b.i_inv * rnB * rnB
+        # tangent t = perp(n) = (-ny, nx): cross(r, t) = r . n
+        rtA = sp.rAx * nx + sp.rAy * ny
+        rtB = sp.rBx * nx + sp.rBy * ny
+        sp.rtA = rtA
+        sp.rtB = rtB
+        kT = a.m_inv + b.m_inv + a.i_inv * rtA * rtA + b.i_inv * rtB * rtB
+        sp.normalMass = 1.0 / kN if kN > 0.0 else 0.0
+        sp.tangentMass = 1.0 / kT if kT > 0.0 else 0.0
+        # The load that sets the point's stiffness follows the impulses
+        # slowly (con.jBias, unused by this solver, carries it between
+        # steps): following every spike and dip makes a loaded stack
+        # breathe and a big pyramid shake itself apart.
+        # A young point (con.bias counts its steps) averages the loads it
+        # has seen, so a scene that starts at rest is stiff within a few
+        # steps instead of sagging while the filter catches up.
+        age = con.bias if con.bias >= 0.0 else 0.0
+        if age > SOFT_LOAD_AGE:
+            age = SOFT_LOAD_AGE
+        smoothing = 1.0 / age if age >= 1.0 else 1.0
+        if smoothing < SOFT_LOAD_SMOOTHING:
+            smoothing = SOFT_LOAD_SMOOTHING
+        load = con.jBias + smoothing * (con.jnAcc * ctx.loadCoef - con.jBias)
+        if warm == 0.0:
+            load = 0.0
+            age = 0.0
+        SoftPointSoftness(sp, &soft, load, size, maxStiffening, ctx.h)
+        # The load as a substep's impulse (jnAcc is the step's).
+        sp.preload = load * ctx.h * preloadFraction
+        # Separation now, less the anchors' part, which the solver adds
+        # back from the bodies' motion within the step.
+        sep = ((sp.rBx - sp.rAx + pbx - pax) * nx + (sp.rBy - sp.rAy + pby - pay) * ny)
+        sp.baseSeparation = sep - ((sp.rBx - sp.rAx) * nx + (sp.rBy - sp.rAy) * ny)
+        sp.relativeVelocity = ((sb.vx - sb.w * sp.rBy - sa.vx + sa.w * sp.rAy) * nx
+                               + (sb.vy + sb.w * sp.rBx - sa.vy - sa.w * sp.rAx) * ny)
+        sp.normalImpulse = con.jnAcc * warm
+        sp.tangentImpulse = con.jtAcc * warm
+        sp.totalNormal = 0.0
+        sp.totalTangent = 0.0
+        sp.maxNormalImpulse = 0.0
+        # Chipmunk's fields, for Arbiter.total_ke and the like.
+        con.nMass = sp.normalMass
+        con.tMass = sp.tangentMass
+        con.bias = age + 1.0
+        con.jBias = load
+        con.bounce = sp.relativeVelocity * arb.e
+    if sc.count == 2:
+        SoftPrepareBlock(sc, a, b)
 
 # Above this condition number the two normal rows are nearly dependent (the
 # points almost coincide) and are solved as one row at their midpoint
@@ -1325,6 +1376,7 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
             ctx.overflowCount += 1
         else:
             counts[key.kind][col] += 1
+    tamias_add(&_overflow_total, ctx.overflowCount)
     total = 0
     for c in range(SOFT_GRAPH_COLORS):
         ctx.colorLanes[c] = total
@@ -1354,35 +1406,62 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
         kind = ctx.colorKeys[i].kind
         ctx.laneContacts[start[kind][c] * SOFT_LANES + fill[kind][c]] = i
         fill[kind][c] += 1
-    SoftRun(ctx, SOFT_TASK_PACK, 0, total, 0)
     return 1
 
+cdef void SoftPrepareLanes(SoftContext *ctx) noexcept nogil:
+    # The coloured contacts prepared straight into their lanes (on the
+    # pool), the others into ctx.contacts, which keeps a coloured one only
+    # where restitution will read it (SoftPackLanes).
+    cdef int i
+    SoftRun(ctx, SOFT_TASK_PACK, 0, ctx.colorLanes[SOFT_GRAPH_COLORS], 0)
+    for i in range(ctx.overflowCount):
+        SoftPrepareContact(ctx, ctx.overflow[i], &ctx.contacts[ctx.overflow[i]])
+
 cdef void SoftPackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
-    # Lanes begin to end, from their contacts (laneContacts).
+    # Lanes begin to end, each contact (laneContacts) prepared and written
+    # into its slot; lane by lane, so that each lane is written whole while
+    # it is in cache. The SoftContact goes through the stack unless
+    # restitution reads it after the substeps: written to ctx.contacts and
+    # read back, it was most of the memory the preparation moved.
     cdef int lane, k, i
     cdef const int *slots
+    cdef cpArbiter *arb
+    cdef cpArray *arbiters = ctx.space.arbiters
+    cdef SoftContact local
+    cdef SoftContact *sc
+    cdef bint keep = tamias_load(&ctx.elastic) != 0
     for lane in range(begin, end):
         slots = &ctx.laneContacts[lane * SOFT_LANES]
+        # The arbiters two lanes ahead and, now that they have arrived, the
+        # contacts of the next lane's (scattered in memory).
+        if lane + 2 < end:
+            for k in range(SOFT_LANES):
+                if slots[2 * SOFT_LANES + k] >= 0:
+                    # (Up to its state: the handlers and stamps after it are
+                    # not read.)
+                    arb = <cpArbiter *>arbiters.arr[ctx.contactSource[slots[2 * SOFT_LANES + k]]]
+                    SoftFetchLines(arb, <char *>&arb.state - <char *>arb + sizeof(arb.state))
         if lane + 1 < end:
-            # The next lane's contacts, scattered (the lines the packing reads).
             for k in range(SOFT_LANES):
                 if slots[SOFT_LANES + k] >= 0:
-                    SoftFetchLines(&ctx.contacts[slots[SOFT_LANES + k]], sizeof(SoftContact))
+                    arb = <cpArbiter *>arbiters.arr[ctx.contactSource[slots[SOFT_LANES + k]]]
+                    SoftFetchLines(arb.contacts, arb.count * sizeof(cpContact))
         # (Slot 0 of a lane is never empty.)
         ctx.lanes[lane].points = ctx.colorKeys[slots[0]].kind + 1
         for k in range(SOFT_LANES):
             i = slots[k]
             if i >= 0:
-                SoftPackLane(ctx, &ctx.lanes[lane], &ctx.laneLinks[lane], k, i)
+                sc = &ctx.contacts[i] if keep else &local
+                SoftPrepareContact(ctx, i, sc)
+                SoftPackLane(ctx, &ctx.lanes[lane], &ctx.laneLinks[lane], k, i, sc)
             else:
                 SoftLanesClear(&ctx.lanes[lane], &ctx.laneLinks[lane], k)
 
 cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, SoftLaneLinks *links, int k,
-                       int i) noexcept nogil:
-    cdef SoftContact *sc = &ctx.contacts[i]
+                       int i, const SoftContact *sc) noexcept nogil:
     cdef SoftBody *a = &ctx.bodies[sc.ia]
     cdef SoftBody *b = &ctx.bodies[sc.ib]
-    cdef SoftPoint *sp
+    cdef const SoftPoint *sp
     cdef int j
     ln.ia[k] = sc.ia
     ln.ib[k] = sc.ib
@@ -2001,7 +2080,6 @@ cdef enum:
     SOFT_TASK_WARM_START
     SOFT_TASK_SOLVE
     SOFT_TASK_RELAX_ACCUMULATE
-    SOFT_TASK_PREPARE
     SOFT_TASK_NARROW
     SOFT_TASK_UNPACK
     SOFT_TASK_STORE
@@ -2017,7 +2095,7 @@ cdef enum:
     SOFT_CHUNK_BODIES = 128
     SOFT_WORKER_SPIN = 1 << 16    # pauses a worker polls for the next stage before it sleeps
     SOFT_THREADED_MIN_CONTACTS = 2048   # last step's arbiters
-    SOFT_CHUNK_CONTACTS = 64      # contacts prepared per chunk
+    SOFT_CHUNK_CONTACTS = 64      # contacts counted or stored per chunk
     SOFT_CHUNK_PAIRS = 64         # pairs of the narrow phase per chunk
 
 cdef struct SoftPool:
@@ -2054,8 +2132,6 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
     elif task == SOFT_TASK_RELAX_ACCUMULATE:
         SoftLanesSolve(&ctx.lanes[begin], &ctx.laneLinks[begin], end - begin, ctx.states,
                        ctx.inv_h, ctx.pushOut, 0, 1, tamias_load(&ctx.elastic) != 0)
-    elif task == SOFT_TASK_PREPARE:
-        SoftPrepareContactRange(ctx, begin, end)
     elif task == SOFT_TASK_NARROW:
         SoftNarrowPhase(ctx, begin, end)
     elif task == SOFT_TASK_UNPACK:
@@ -2103,8 +2179,7 @@ cdef void SoftRun(SoftContext *ctx, int task, int begin, int end, bint flag) noe
     if (task <= SOFT_TASK_INTEGRATE_POSITIONS or task == SOFT_TASK_FINISH_BODIES
             or task == SOFT_TASK_UPDATE_SHAPES or task == SOFT_TASK_GATHER):
         chunk = SOFT_CHUNK_BODIES
-    elif (task == SOFT_TASK_PREPARE or task == SOFT_TASK_STORE
-            or task == SOFT_TASK_COUNT):
+    elif task == SOFT_TASK_STORE or task == SOFT_TASK_COUNT:
         chunk = SOFT_CHUNK_CONTACTS
     elif task == SOFT_TASK_NARROW or task == SOFT_TASK_MOVE_CONTACTS:
         chunk = SOFT_CHUNK_PAIRS
@@ -2295,6 +2370,9 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     ready = ready and SoftColorContacts(&ctx)
     SoftProfileMark(SOFT_STAGE_COLOR)
     if ready:
+        SoftPrepareLanes(&ctx)
+    SoftProfileMark(SOFT_STAGE_PREPARE)
+    if ready:
         for k in range(ctx.substeps):
             SoftRun(&ctx, SOFT_TASK_INTEGRATE_VELOCITIES, 1, ctx.bodyCount, k == ctx.substeps - 1)
             SoftProfileMark(SOFT_STAGE_INTEGRATE)
@@ -2385,6 +2463,12 @@ def _kept_threads_count():
 def _kept_walks_count():
     """Steps so far (all spaces) that took their pairs from a kept walk."""
     return tamias_load(&_kept_walks)
+
+def _overflow_count():
+    """Contacts so far (all spaces) solved one by one, outside the graph's
+    colours (a body in more contacts than there are colours, or a contact
+    no lane takes)."""
+    return tamias_load(&_overflow_total)
 
 def _pool_state():
     """The soft solver's thread pool: (workers started, stages handed out)."""
