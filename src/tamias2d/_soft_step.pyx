@@ -547,6 +547,16 @@ cdef void SoftUpdateShapes(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef long count = 0
     cdef int i
     for i in range(begin, end):
+        # The bodies and their shapes are scattered in memory: the body's
+        # line with its shape list two bodies ahead of its first shape's
+        # lines (all of a polygon's: its local planes are read, its world
+        # planes written).
+        if i + 2 * SOFT_BODY_PREFETCH < end:
+            tamias_prefetch(&(<cpBody *>bodies.arr[i + 2 * SOFT_BODY_PREFETCH]).shapeList)
+        if i + SOFT_BODY_PREFETCH < end:
+            shape = (<cpBody *>bodies.arr[i + SOFT_BODY_PREFETCH]).shapeList
+            if shape != NULL:
+                SoftFetchLines(shape, sizeof(cpPolyShape))
         shape = (<cpBody *>bodies.arr[i]).shapeList
         while shape != NULL:
             cpShapeCacheBB(shape)
