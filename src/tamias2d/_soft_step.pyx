@@ -131,7 +131,7 @@ cdef enum:
     SOFT_SCRATCH_STATES
     SOFT_SCRATCH_CONTACTS
     SOFT_SCRATCH_LANES
-    SOFT_SCRATCH_COLORS       # each contact's colour
+    SOFT_SCRATCH_COLORS       # each contact's colour, then its lane slot
     SOFT_SCRATCH_BITS         # the colours of each body, as bits
     SOFT_SCRATCH_OVERFLOW
     SOFT_SCRATCH_JOINT_BODIES
@@ -146,7 +146,6 @@ cdef enum:
     SOFT_SCRATCH_CHANGED_IN   # the restitution pass that last changed each body
     SOFT_SCRATCH_DESTINATIONS # where each pair's contacts go in the contact buffers (SoftCollide)
     SOFT_SCRATCH_PAIR_ARBITERS  # each updated pair's arbiter, packed (SoftCollide)
-    SOFT_SCRATCH_LANE_CONTACTS  # the contact in each lane slot (SoftColorContacts)
     SOFT_SCRATCH_COUNT
 
 # (cpSoftScratch holds 20 buffers.)
@@ -230,7 +229,7 @@ cdef struct SoftContext:
     int colorLanes[SOFT_GRAPH_COLORS + 1]   # colour c: lanes[colorLanes[c]:colorLanes[c+1]]
     int *overflow             # SoftContact indices solved one by one
     volatile long shapesUpdated   # by SoftUpdateShapes
-    int *laneContacts         # the contact in each lane slot (lane * SOFT_LANES + k; -1: none)
+    int *contactSlots         # each contact's lane slot (lane * SOFT_LANES + k; -1: the overflow)
     SoftColorKey *colorKeys   # by SoftCountRange, for SoftColorContacts and the preparation
     int overflowCount
     SoftPair *pairs           # this step's pairs from the broad phase (or the last walk's)
@@ -1349,7 +1348,7 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
     cdef int counts[2][SOFT_GRAPH_COLORS]    # [points - 1][colour]
     cdef int fill[2][SOFT_GRAPH_COLORS]
     cdef int start[2][SOFT_GRAPH_COLORS]     # first lane of each kind
-    cdef int kind
+    cdef int kind, lanes
     used = <uint32_t *>_reserve(space, SOFT_SCRATCH_BITS, ctx.bodyCount, sizeof(uint32_t))
     color = <int *>_reserve(space, SOFT_SCRATCH_COLORS, n, sizeof(int))
     ctx.overflow = <int *>_reserve(space, SOFT_SCRATCH_OVERFLOW, n, sizeof(int))
@@ -1399,23 +1398,28 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
                                               sizeof(SoftLaneLinks))
     if ctx.lanes == NULL or ctx.laneLinks == NULL:
         return 0
-    # Which contact goes in each lane slot (here, in order); the copying
-    # into the lanes after, on the pool, lane by lane: each lane is written
-    # whole while in cache (contact by contact, each contact's slot took a
-    # cache miss on each of the lane's lines). A colour's last lane of a
-    # kind may be part empty (-1).
-    ctx.laneContacts = <int *>_reserve(space, SOFT_SCRATCH_LANE_CONTACTS, total * SOFT_LANES,
-                                       sizeof(int))
-    if ctx.laneContacts == NULL:
-        return 0
-    memset(ctx.laneContacts, 0xff, <size_t>total * SOFT_LANES * sizeof(int))
+    # Which lane slot each contact takes (color[] becomes that, -1 for the
+    # overflow), colour by colour in arbiter order; the contacts are
+    # prepared into them after, on the pool (SoftPackLanes).
     for i in range(n):
         c = color[i]
         if c == SOFT_GRAPH_COLORS:
+            color[i] = -1
             continue
         kind = ctx.colorKeys[i].kind
-        ctx.laneContacts[start[kind][c] * SOFT_LANES + fill[kind][c]] = i
+        color[i] = start[kind][c] * SOFT_LANES + fill[kind][c]
         fill[kind][c] += 1
+    ctx.contactSlots = color
+    # Each lane's kind, and the empty slots of each colour's last lane of
+    # a kind (they take no impulse).
+    for c in range(SOFT_GRAPH_COLORS):
+        for kind in range(2):
+            lanes = (counts[kind][c] + SOFT_LANES - 1) // SOFT_LANES
+            for i in range(start[kind][c], start[kind][c] + lanes):
+                ctx.lanes[i].points = kind + 1
+            for i in range(counts[kind][c], lanes * SOFT_LANES):
+                SoftLanesClear(&ctx.lanes[start[kind][c] + i // SOFT_LANES],
+                               &ctx.laneLinks[start[kind][c] + i // SOFT_LANES], i % SOFT_LANES)
     return 1
 
 cdef void SoftPrepareLanes(SoftContext *ctx) noexcept nogil:
@@ -1423,49 +1427,41 @@ cdef void SoftPrepareLanes(SoftContext *ctx) noexcept nogil:
     # pool), the others into ctx.contacts, which keeps a coloured one only
     # where restitution will read it (SoftPackLanes).
     cdef int i
-    SoftRun(ctx, SOFT_TASK_PACK, 0, ctx.colorLanes[SOFT_GRAPH_COLORS], 0)
+    SoftRun(ctx, SOFT_TASK_PACK, 0, ctx.contactCount, 0)
     for i in range(ctx.overflowCount):
         SoftPrepareContact(ctx, ctx.overflow[i], &ctx.contacts[ctx.overflow[i]])
 
 cdef void SoftPackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
-    # Lanes begin to end, each contact (laneContacts) prepared and written
-    # into its slot; lane by lane, so that each lane is written whole while
-    # it is in cache. The SoftContact goes through the stack unless
-    # restitution reads it after the substeps: written to ctx.contacts and
-    # read back, it was most of the memory the preparation moved.
-    cdef int lane, k, i
-    cdef const int *slots
+    # Contacts begin to end, in arbiter order, each prepared and written
+    # into its lane slot (contactSlots). The SoftContact goes through the
+    # stack unless restitution reads it after the substeps: written to
+    # ctx.contacts and read back, it was most of the memory the preparation
+    # moved. In arbiter order the arbiters, their contacts and bodies are
+    # read in the order they lie in memory, and the lanes being filled are
+    # few (about two per colour), so they stay in cache until full.
+    cdef int i, slot
     cdef cpArbiter *arb
     cdef cpArray *arbiters = ctx.space.arbiters
     cdef SoftContact local
     cdef SoftContact *sc
     cdef bint keep = tamias_load(&ctx.elastic) != 0
-    for lane in range(begin, end):
-        slots = &ctx.laneContacts[lane * SOFT_LANES]
-        # The arbiters two lanes ahead and, now that they have arrived, the
-        # contacts of the next lane's (scattered in memory).
-        if lane + 2 < end:
-            for k in range(SOFT_LANES):
-                if slots[2 * SOFT_LANES + k] >= 0:
-                    # (Up to its state: the handlers and stamps after it are
-                    # not read.)
-                    arb = <cpArbiter *>arbiters.arr[ctx.contactSource[slots[2 * SOFT_LANES + k]]]
-                    SoftFetchLines(arb, <char *>&arb.state - <char *>arb + sizeof(arb.state))
-        if lane + 1 < end:
-            for k in range(SOFT_LANES):
-                if slots[SOFT_LANES + k] >= 0:
-                    arb = <cpArbiter *>arbiters.arr[ctx.contactSource[slots[SOFT_LANES + k]]]
-                    SoftFetchLines(arb.contacts, arb.count * sizeof(cpContact))
-        # (Slot 0 of a lane is never empty.)
-        ctx.lanes[lane].points = ctx.colorKeys[slots[0]].kind + 1
-        for k in range(SOFT_LANES):
-            i = slots[k]
-            if i >= 0:
-                sc = &ctx.contacts[i] if keep else &local
-                SoftPrepareContact(ctx, i, sc)
-                SoftPackLane(ctx, &ctx.lanes[lane], &ctx.laneLinks[lane], k, i, sc)
-            else:
-                SoftLanesClear(&ctx.lanes[lane], &ctx.laneLinks[lane], k)
+    for i in range(begin, end):
+        if i + SOFT_ARBITER_PREFETCH < end:
+            # (Up to its state: the handlers and stamps after it are not
+            # read.)
+            arb = <cpArbiter *>arbiters.arr[ctx.contactSource[i + SOFT_ARBITER_PREFETCH]]
+            SoftFetchLines(arb, <char *>&arb.state - <char *>arb + sizeof(arb.state))
+        if i + SOFT_ARBITER_PREFETCH // 2 < end:
+            # Its contacts, now that the arbiter itself has been fetched.
+            arb = <cpArbiter *>arbiters.arr[ctx.contactSource[i + SOFT_ARBITER_PREFETCH // 2]]
+            SoftFetchLines(arb.contacts, arb.count * sizeof(cpContact))
+        slot = ctx.contactSlots[i]
+        if slot < 0:
+            continue
+        sc = &ctx.contacts[i] if keep else &local
+        SoftPrepareContact(ctx, i, sc)
+        SoftPackLane(ctx, &ctx.lanes[slot // SOFT_LANES], &ctx.laneLinks[slot // SOFT_LANES],
+                     slot % SOFT_LANES, i, sc)
 
 cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, SoftLaneLinks *links, int k,
                        int i, const SoftContact *sc) noexcept nogil:
@@ -2189,7 +2185,7 @@ cdef void SoftRun(SoftContext *ctx, int task, int begin, int end, bint flag) noe
     if (task <= SOFT_TASK_INTEGRATE_POSITIONS or task == SOFT_TASK_FINISH_BODIES
             or task == SOFT_TASK_UPDATE_SHAPES or task == SOFT_TASK_GATHER):
         chunk = SOFT_CHUNK_BODIES
-    elif task == SOFT_TASK_STORE or task == SOFT_TASK_COUNT:
+    elif task == SOFT_TASK_STORE or task == SOFT_TASK_COUNT or task == SOFT_TASK_PACK:
         chunk = SOFT_CHUNK_CONTACTS
     elif task == SOFT_TASK_NARROW or task == SOFT_TASK_MOVE_CONTACTS:
         chunk = SOFT_CHUNK_PAIRS
