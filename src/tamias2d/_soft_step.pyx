@@ -390,6 +390,17 @@ cdef inline bint SoftGuessHolds(const cpArbiter *arb, const cpCollisionInfo *inf
     return arb != NULL and arb.cached and (
         (arb.a == info.a and arb.b == info.b) or (arb.a == info.b and arb.b == info.a))
 
+cdef inline void SoftNoteShapes(const cpSpace *space, cpArbiter *arb, const cpShape *a,
+                                const cpShape *b) noexcept nogil:
+    # What the count (SoftCountContact) reads of a pair's shapes, noted in
+    # its arbiter while they are in cache; a and b in the arbiter's order
+    # (the collision's, which cpArbiterUpdate gives it).
+    arb.softSideA = SoftShapeSide(a)
+    arb.softSideB = SoftShapeSide(b)
+    arb.softSlotA = a.softSlot
+    arb.softSlotB = b.softSlot
+    arb.softNoted = space.stamp
+
 cdef inline bint SoftFlatSegment(const cpShape *shape) noexcept nogil:
     # A segment of radius 0 has no inside: its contact normal says which
     # side the other shape is on, and nothing else can.
@@ -507,6 +518,8 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
                 if slot != NULL:
                     slot.arbiter = c.arb
             SoftKeepSide(ctx.space, c.arb, &c.info)
+            if c.arb != NULL:
+                SoftNoteShapes(ctx.space, c.arb, c.info.a, c.info.b)
             if c.arb != NULL and ctx.updateInNarrow:
                 # What cpSpaceAcceptCollision would do first, done here as
                 # no callback runs before it that could change its inputs
@@ -559,6 +572,9 @@ cdef void SoftUpdateShapes(SoftContext *ctx, int begin, int end) noexcept nogil:
         shape = (<cpBody *>bodies.arr[i]).shapeList
         while shape != NULL:
             cpShapeCacheBB(shape)
+            # The slot SoftGatherRange will give the body, unless the
+            # components stage wakes or puts to sleep a body (checked).
+            shape.softSlot = i + 1
             count += 1
             shape = shape.next
     tamias_add(&ctx.shapesUpdated, count)
@@ -696,6 +712,8 @@ cdef void SoftAcceptPair(SoftContext *ctx, int i) noexcept nogil:
     cpSpacePushContacts(space, c.info.count)
     arb = cpSpaceAcceptCollision(space, ctx.pairs[i].a, ctx.pairs[i].b, &c.info, c.arb,
                                  c.updated, c.solid if c.updated else -1)
+    if c.arb == NULL and arb != NULL:
+        SoftNoteShapes(space, arb, c.info.a, c.info.b)   # (new: not noted in the narrow phase)
     # (The point's age, carried by cpArbiterUpdate; 0 for a new one.)
     ctx.touchingPairs += 1
     if contacts[0].bias < SOFT_YOUNG_AGE:
@@ -997,11 +1015,16 @@ cdef void SoftFinishJoints(SoftContext *ctx) noexcept nogil:
 
 # -- contacts ------------------------------------------------------------------------------
 
-cdef inline cpFloat SoftShapeSize(const cpShape *shape, const SoftBody *body) noexcept nogil:
-    # The smaller side of the bounding box of a movable body's shape; 0 for
-    # an immovable one (a ground segment's thickness says nothing). The
-    # body's masses from its slot (the same numbers), or for slot 0 from
-    # the body (static or asleep): the shapes' bodies stay out of cache.
+cdef inline cpFloat SoftShapeSide(const cpShape *shape) noexcept nogil:
+    # The smaller side of a shape's bounding box.
+    return fmin(shape.bb.r - shape.bb.l, shape.bb.t - shape.bb.b)
+
+cdef inline cpFloat SoftShapeSize(cpFloat side, const cpShape *shape,
+                                  const SoftBody *body) noexcept nogil:
+    # A movable body's shape's size (its box's smaller side); 0 for an
+    # immovable one (a ground segment's thickness says nothing). The body's
+    # masses from its slot (the same numbers), or for slot 0 from the body
+    # (static or asleep): the shapes' bodies stay out of cache.
     cdef cpFloat m_inv = body.m_inv
     cdef cpFloat i_inv = body.i_inv
     if body.body == NULL:
@@ -1009,12 +1032,14 @@ cdef inline cpFloat SoftShapeSize(const cpShape *shape, const SoftBody *body) no
         i_inv = shape.body.i_inv
     if m_inv == 0.0 and i_inv == 0.0:
         return 0.0
-    return fmin(shape.bb.r - shape.bb.l, shape.bb.t - shape.bb.b)
+    return side
 
-cdef inline cpFloat SoftContactSize(const cpArbiter *arb, const SoftBody *a,
-                                    const SoftBody *b) noexcept nogil:
-    cdef cpFloat sa = SoftShapeSize(arb.a, a)
-    cdef cpFloat sb = SoftShapeSize(arb.b, b)
+cdef inline cpFloat SoftContactSize(const cpArbiter *arb, const SoftBody *a, const SoftBody *b,
+                                    bint noted) noexcept nogil:
+    # The smaller of its movable shapes' sizes; the sides as the narrow
+    # phase noted them if `noted` (the shapes stay out of cache).
+    cdef cpFloat sa = SoftShapeSize(arb.softSideA if noted else SoftShapeSide(arb.a), arb.a, a)
+    cdef cpFloat sb = SoftShapeSize(arb.softSideB if noted else SoftShapeSide(arb.b), arb.b, b)
     if sa == 0.0:
         return sb
     if sb == 0.0:
@@ -1134,18 +1159,26 @@ cdef inline int SoftContactKind(const cpArbiter *arb, const SoftBody *a,
         return 1
     return -1
 
+cdef inline int SoftNotedIndex(int guess, cpBody *body, SoftContext *ctx) noexcept nogil:
+    # SoftIndex, from the slot the narrow phase noted where it is right (the
+    # body itself stays out of cache).
+    if guess > 0 and guess < ctx.bodyCount and ctx.bodies[guess].body == body:
+        return guess
+    return SoftIndex(body, ctx.bodies, ctx.bodyCount)
+
 cdef inline void SoftCountContact(SoftContext *ctx, cpArbiter *arb, int n, bint atomic) noexcept nogil:
     # Contact n (of arbiter arb): its key, whether it bounces, and its
     # bodies' counts. (Slot 0's count is never read.)
     cdef SoftColorKey *key = &ctx.colorKeys[n]
-    cdef int ia = SoftIndex(arb.body_a, ctx.bodies, ctx.bodyCount)
-    cdef int ib = SoftIndex(arb.body_b, ctx.bodies, ctx.bodyCount)
+    cdef bint noted = arb.softNoted == ctx.space.stamp
+    cdef int ia = SoftNotedIndex(arb.softSlotA if noted else 0, arb.body_a, ctx)
+    cdef int ib = SoftNotedIndex(arb.softSlotB if noted else 0, arb.body_b, ctx)
     key.ia = ia
     key.ib = ib
     key.a = ia if SoftMovable(ctx, ia) else 0
     key.b = ib if SoftMovable(ctx, ib) else 0
     key.kind = SoftContactKind(arb, &ctx.bodies[ia], &ctx.bodies[ib])
-    key.size = SoftContactSize(arb, &ctx.bodies[ia], &ctx.bodies[ib])
+    key.size = SoftContactSize(arb, &ctx.bodies[ia], &ctx.bodies[ib], noted)
     if arb.e != 0.0:
         tamias_store(&ctx.elastic, 1)
     if atomic:
@@ -1168,12 +1201,8 @@ cdef void SoftCountRange(SoftContext *ctx, int begin, int end, bint atomic) noex
             # (Arbiters are scattered: a cache miss each otherwise.)
             SoftFetchLines(arbiters.arr[i + SOFT_ARBITER_PREFETCH], sizeof(cpArbiter))
         if i + SOFT_ARBITER_PREFETCH // 2 < end:
-            # Its contacts and shapes' boxes, now that the arbiter itself
-            # has been fetched.
-            arb = <cpArbiter *>arbiters.arr[i + SOFT_ARBITER_PREFETCH // 2]
-            tamias_prefetch(arb.contacts)
-            tamias_prefetch(&arb.a.bb)
-            tamias_prefetch(&arb.b.bb)
+            # Its contacts, now that the arbiter itself has been fetched.
+            tamias_prefetch((<cpArbiter *>arbiters.arr[i + SOFT_ARBITER_PREFETCH // 2]).contacts)
         arb = <cpArbiter *>arbiters.arr[i]
         if arb.count <= 0 or arb.contacts == NULL:
             tamias_store(&ctx.emptyArbiter, 1)

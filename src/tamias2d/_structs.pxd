@@ -133,6 +133,9 @@ cdef struct cpShape:
     cpShapeMassInfo massInfo
     cpBB bb
     cpBool sensor
+    # Not Munk2D's (in the padding after `sensor`): the soft step's guess of
+    # its body's slot, set with its box (_soft_step.pyx, SoftUpdateShapes).
+    int softSlot
     cpFloat e
     cpFloat u
     cpVect surfaceV
@@ -250,6 +253,14 @@ cdef struct cpArbiter:
     int count
     cpContact *contacts
     cpVect n
+    # Not Munk2D's: what the soft step noted of the two shapes in its narrow
+    # phase (their bodies' guessed slots and their boxes' smaller sides),
+    # valid in the step whose stamp softNoted holds (SoftNoteShapes).
+    cpFloat softSideA
+    cpFloat softSideB
+    int softSlotA
+    int softSlotB
+    cpTimestamp softNoted
     cpCollisionHandler *handlerAB
     cpCollisionHandler *handlerBA
     cpCollisionHandler *handlerA

@@ -212,6 +212,7 @@ cdef cpArbiter *cpArbiterInit(cpArbiter *arb, cpShape *a, cpShape *b) noexcept n
     arb.data = NULL
     arb.handlerVersion = 0
     arb.softThreaded = 0
+    arb.softNoted = 0
     return arb
 
 cdef inline cpCollisionHandler *cpSpaceLookupHandler(cpSpace *space, cpCollisionType a,

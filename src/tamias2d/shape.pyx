@@ -241,6 +241,7 @@ cdef cpShape *cpShapeInit(cpShape *shape, const cpShapeClass *klass, cpBody *bod
     shape.body = body
     shape.massInfo = massInfo
     shape.sensor = 0
+    shape.softSlot = 0
     shape.e = 0.0
     shape.u = 0.0
     shape.surfaceV = cpv(0.0, 0.0)
