@@ -483,11 +483,9 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
             # The arbiter its slot guesses, now that the slot has arrived.
             q = &ctx.pairs[i + SOFT_NARROW_PREFETCH // 2]
             if q.slot != NULL and q.slot.arbiter != NULL:
-                # (Its shapes, count and flags lie on different lines.)
-                guess = <cpArbiter *>q.slot.arbiter
-                tamias_prefetch(guess)
-                tamias_prefetch(&guess.count)
-                tamias_prefetch(&guess.cached)
+                # (All of it: the guess's check reads its shapes and flags,
+                # the update and SoftNoteShapes write all four lines.)
+                SoftFetchLines(q.slot.arbiter, sizeof(cpArbiter))
         if cpSpaceRejectPair(ctx.space, p.a, p.b, &margin):
             ctx.touching[i] = 0
             continue
@@ -546,7 +544,9 @@ cdef inline void SoftPrefetchArbiter(cpSpace *space, SoftCandidate *c) noexcept 
     if c.info.count == 0:
         return
     if c.arb != NULL:
-        tamias_prefetch(c.arb)
+        # (Its contacts pointer, stamp and state lie on different lines.)
+        tamias_prefetch(&c.arb.contacts)
+        tamias_prefetch(&c.arb.stamp)
     else:
         tamias_prefetch(&arbs.table[CP_HASH_PAIR(<cpHashValue>c.info.a,
                                                  <cpHashValue>c.info.b) % arbs.size])
