@@ -1460,6 +1460,13 @@ cdef void SoftPrepareLanes(SoftContext *ctx) noexcept nogil:
     for i in range(ctx.overflowCount):
         SoftPrepareContact(ctx, ctx.overflow[i], &ctx.contacts[ctx.overflow[i]])
 
+cdef inline void SoftFetchSlot(SoftContext *ctx, int i) noexcept nogil:
+    # What the preparation reads of a body slot (in a large scene the
+    # arrays of the step's bodies are beyond the core's cache).
+    tamias_prefetch(&ctx.bodies[i])
+    tamias_prefetch(&ctx.states[i])
+    tamias_prefetch(&ctx.motion[i].px)
+
 cdef void SoftPackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
     # Contacts begin to end, in arbiter order, each prepared and written
     # into its lane slot (contactSlots). The SoftContact goes through the
@@ -1481,9 +1488,12 @@ cdef void SoftPackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
             arb = <cpArbiter *>arbiters.arr[ctx.contactSource[i + SOFT_ARBITER_PREFETCH]]
             SoftFetchLines(arb, <char *>&arb.state - <char *>arb + sizeof(arb.state))
         if i + SOFT_ARBITER_PREFETCH // 2 < end:
-            # Its contacts, now that the arbiter itself has been fetched.
+            # Its contacts, now that the arbiter itself has been fetched,
+            # and its bodies' slots in the arrays of the step's bodies.
             arb = <cpArbiter *>arbiters.arr[ctx.contactSource[i + SOFT_ARBITER_PREFETCH // 2]]
             SoftFetchLines(arb.contacts, arb.count * sizeof(cpContact))
+            SoftFetchSlot(ctx, ctx.colorKeys[i + SOFT_ARBITER_PREFETCH // 2].ia)
+            SoftFetchSlot(ctx, ctx.colorKeys[i + SOFT_ARBITER_PREFETCH // 2].ib)
         slot = ctx.contactSlots[i]
         if slot < 0:
             continue
