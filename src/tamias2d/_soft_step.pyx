@@ -486,6 +486,12 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
                 # (All of it: the guess's check reads its shapes and flags,
                 # the update and SoftNoteShapes write all four lines.)
                 SoftFetchLines(q.slot.arbiter, sizeof(cpArbiter))
+            # And, the shapes having arrived, what the rejection reads of
+            # their bodies (masses and the bullet flag, two lines apart).
+            tamias_prefetch(&q.a.body.m_inv)
+            tamias_prefetch(&q.a.body.isBullet)
+            tamias_prefetch(&q.b.body.m_inv)
+            tamias_prefetch(&q.b.body.isBullet)
         if cpSpaceRejectPair(ctx.space, p.a, p.b, &margin):
             ctx.touching[i] = 0
             continue
