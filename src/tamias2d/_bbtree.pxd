@@ -19,6 +19,9 @@ from tamias2d._structs cimport (cpArray, cpHashSet, cpSpatialIndex, cpSpatialInd
 
 # -- the tree's own types ---------------------------------------------------------
 ctypedef cpVect (*cpBBTreeVelocityFunc)(void *obj) noexcept nogil
+# Not Munk2D's: fetches into cache what the tree's box function will read
+# of an object beyond the object itself (cpBBTreeSetFetchFunc).
+ctypedef void (*cpBBTreeFetchFunc)(void *obj) noexcept nogil
 
 cdef struct Node
 cdef struct Pair
@@ -40,6 +43,11 @@ cdef struct cpBBTree:
     # static tree are looked for (the soft solver's reach for continuous
     # collision, cpBBTreeSetStaticReach; 0, as in Munk2D, otherwise).
     cpFloat staticReach
+    # Not Munk2D's: the leaves listed in the leaf set's order for their
+    # refresh (RefreshLeaves), and the object fetch function.
+    Node **refreshList
+    int refreshCap
+    cpBBTreeFetchFunc fetchFunc
 
 cdef struct NodeChildren:
     Node *a
@@ -88,6 +96,7 @@ cdef cpSpatialIndex *cpBBTreeInit(cpBBTree *tree, cpSpatialIndexBBFunc bbfunc,
 cdef cpSpatialIndex *cpBBTreeNew(cpSpatialIndexBBFunc bbfunc, cpSpatialIndex *staticIndex) noexcept nogil
 cdef void cpBBTreeOptimize(cpSpatialIndex *index) noexcept nogil
 cdef void cpBBTreeSetVelocityFunc(cpSpatialIndex *index, cpBBTreeVelocityFunc func) noexcept nogil
+cdef void cpBBTreeSetFetchFunc(cpSpatialIndex *index, cpBBTreeFetchFunc func) noexcept nogil
 # The soft solver's broad phase: cpBBTreeReindexQuery reporting where each
 # pair's id lives, or nothing when the tree is still at the version in
 # `known` (then the caller's record of the last walk holds); false (nothing

@@ -687,6 +687,12 @@ cdef void cpBBTreeSetVelocityFunc(cpSpatialIndex *index, cpBBTreeVelocityFunc fu
     (<cpBBTree *>index).velocityFunc = func
 
 
+cdef void cpBBTreeSetFetchFunc(cpSpatialIndex *index, cpBBTreeFetchFunc func) noexcept nogil:
+    if index.klass != &klass:
+        return
+    (<cpBBTree *>index).fetchFunc = func
+
+
 cdef void RequeryLeaf(void *elt, void *data) noexcept nogil:
     cdef Node *leaf = <Node *>elt
     cdef cpBBTree *tree = <cpBBTree *>data
@@ -725,6 +731,9 @@ cdef void cpBBTreeDestroy(cpSpatialIndex *index) noexcept nogil:
     cdef cpBBTree *tree = <cpBBTree *>index
     cdef int i
     cpHashSetFree(tree.leaves)
+    free(tree.refreshList)
+    tree.refreshList = NULL
+    tree.refreshCap = 0
     if tree.allocatedBuffers != NULL:
         for i in range(tree.allocatedBuffers.num):
             free(tree.allocatedBuffers.arr[i])
@@ -767,6 +776,48 @@ cdef void LeafUpdateWrap(void *elt, void *data) noexcept nogil:
     LeafUpdate(<Node *>elt, <cpBBTree *>data)
 
 
+cdef struct LeafList:
+    Node **items
+    int count
+
+
+cdef void ListLeaf(void *elt, void *data) noexcept nogil:
+    cdef LeafList *list = <LeafList *>data
+    list.items[list.count] = <Node *>elt
+    list.count += 1
+
+
+cdef void RefreshLeaves(cpBBTree *tree) noexcept nogil:
+    # LeafUpdate on every leaf in the leaf set's order (Munk2D's), from a
+    # list of them, so that each leaf's node, object and what its box
+    # function reads (fetchFunc) are fetched a few leaves ahead: the set's
+    # order is not the order they lie in memory, and the refresh was a cache
+    # miss or more per leaf. (Without memory for the list: unfetched.)
+    cdef int n = cpHashSetCount(tree.leaves)
+    cdef Node **grown
+    cdef LeafList list
+    cdef int i
+    if n > tree.refreshCap:
+        grown = <Node **>cprealloc(tree.refreshList, n * sizeof(Node *))
+        if grown == NULL:
+            cpHashSetEach(tree.leaves, LeafUpdateWrap, tree)
+            return
+        tree.refreshList = grown
+        tree.refreshCap = n
+    list.items = tree.refreshList
+    list.count = 0
+    cpHashSetEach(tree.leaves, ListLeaf, &list)
+    for i in range(list.count):
+        if i + 16 < list.count:
+            tamias_prefetch(list.items[i + 16])
+        if i + 8 < list.count:
+            tamias_prefetch(list.items[i + 8].obj)
+            tamias_prefetch(<char *>list.items[i + 8].obj + 64)
+        if i + 4 < list.count and tree.fetchFunc != NULL:
+            tree.fetchFunc(list.items[i + 4].obj)
+        LeafUpdate(list.items[i], tree)
+
+
 cdef void ReindexQuery(cpBBTree *tree, cpSpatialIndexQueryFunc func, cpBBTreeSlotFunc slotFunc,
                        void *data, unsigned long long *known) noexcept nogil:
     # Pairs go to func (the id it returns is kept) or, with slotFunc, to
@@ -782,7 +833,7 @@ cdef void ReindexQuery(cpBBTree *tree, cpSpatialIndexQueryFunc func, cpBBTreeSlo
             known[0] = 0
         return
     # Leaves are refreshed in hash-set order; LeafUpdate may change the root.
-    cpHashSetEach(tree.leaves, LeafUpdateWrap, tree)
+    RefreshLeaves(tree)
     if known != NULL and known[0] != 0 and known[0] == tree.version:
         IncrementStamp(tree)
         return

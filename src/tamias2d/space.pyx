@@ -29,7 +29,7 @@ import math
 import platform
 import weakref
 
-from tamias2d._config cimport (cpFloat, cpBool, cpHashValue, cpCollisionType,
+from tamias2d._config cimport (tamias_prefetch, cpFloat, cpBool, cpHashValue, cpCollisionType,
     cpCollisionID, cpTimestamp, TAMIAS_FLOAT_0_1F, TAMIAS_FLOAT_0_9F,
     CP_HASH_PAIR, CP_HASH_PAIR_ORDERED, CP_WILDCARD_COLLISION_TYPE,
     CP_MAX_CONTACTS_PER_ARBITER, CP_BUFFER_BYTES)
@@ -53,6 +53,7 @@ from tamias2d._spatialindex cimport (cpSpatialIndexFree, cpSpatialIndexEach,
     cpSpatialIndexReindexObject, cpSpatialIndexReindexQuery, cpSpatialIndexQuery,
     cpSpatialIndexSegmentQuery)
 from tamias2d._bbtree cimport (cpBBTreeNew, cpBBTreeSetVelocityFunc, cpBBTreeVelocityFunc,
+    cpBBTreeSetFetchFunc,
     cpBBTreeClass, cpBBTreeGetStaticReach)
 from tamias2d._spacehash cimport cpSpaceHashNew
 from tamias2d.vector cimport (cpVect, cpBB, cpTransform, cpv, cpvadd, cpvsub, cpvmult,
@@ -150,6 +151,15 @@ cdef cpBB _shapeGetBB(void *obj) noexcept nogil:
     return cpBBNew(bb.l - m + cpfmin(d.x, 0.0), bb.b - m + cpfmin(d.y, 0.0),
                    bb.r + m + cpfmax(d.x, 0.0), bb.t + m + cpfmax(d.y, 0.0))
 
+cdef void _shapeFetchBody(void *obj) noexcept nogil:
+    # What _shapeGetBB and the tree's fattening read of a shape's body (its
+    # mass, velocity and bullet flag, on three lines), fetched ahead by the
+    # tree's refresh of its leaves.
+    cdef cpBody *body = (<cpShape *>obj).body
+    tamias_prefetch(&body.m)
+    tamias_prefetch(&body.v)
+    tamias_prefetch(&body.isBullet)
+
 # The dynamic tree predicts a shape's motion from its body's velocity.
 cdef cpVect ShapeVelocityFunc(void *obj) noexcept nogil:
     return (<cpShape *>obj).body.v
@@ -186,6 +196,7 @@ cdef cpSpace *cpSpaceInit(cpSpace *space) noexcept nogil:
     space.dynamicShapes = cpBBTreeNew(_shapeGetBB, space.staticShapes)
     if space.dynamicShapes != NULL:
         cpBBTreeSetVelocityFunc(space.dynamicShapes, ShapeVelocityFunc)
+        cpBBTreeSetFetchFunc(space.dynamicShapes, _shapeFetchBody)
 
     space.allocatedBuffers = cpArrayNew(0)
     space.dynamicBodies = cpArrayNew(0)
