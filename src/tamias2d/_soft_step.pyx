@@ -1445,13 +1445,11 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
         color[i] = start[kind][c] * SOFT_LANES + fill[kind][c]
         fill[kind][c] += 1
     ctx.contactSlots = color
-    # Each lane's kind, and the empty slots of each colour's last lane of
-    # a kind (they take no impulse).
+    # The empty slots of each colour's last lane of a kind (they take no
+    # impulse). (Each lane's kind is written by the contact in its slot 0.)
     for c in range(SOFT_GRAPH_COLORS):
         for kind in range(2):
             lanes = (counts[kind][c] + SOFT_LANES - 1) // SOFT_LANES
-            for i in range(start[kind][c], start[kind][c] + lanes):
-                ctx.lanes[i].points = kind + 1
             for i in range(counts[kind][c], lanes * SOFT_LANES):
                 SoftLanesClear(&ctx.lanes[start[kind][c] + i // SOFT_LANES],
                                &ctx.laneLinks[start[kind][c] + i // SOFT_LANES], i % SOFT_LANES)
@@ -1505,6 +1503,9 @@ cdef void SoftPackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
             continue
         sc = &ctx.contacts[i] if keep else &local
         SoftPrepareContact(ctx, i, sc)
+        if slot % SOFT_LANES == 0:
+            # (Slot 0 of a lane is never empty: its contact says the kind.)
+            ctx.lanes[slot // SOFT_LANES].points = ctx.colorKeys[i].kind + 1
         SoftPackLane(ctx, &ctx.lanes[slot // SOFT_LANES], &ctx.laneLinks[slot // SOFT_LANES],
                      slot % SOFT_LANES, i, sc)
 
