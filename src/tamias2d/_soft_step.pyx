@@ -240,6 +240,7 @@ cdef struct SoftContext:
     cpContact **destinations  # on threads, with updateInNarrow: where each pair's contacts go
     cpArbiter **pairArbiters  # ... and each updated pair's arbiter (the candidate's, packed)
     bint updateInNarrow       # no begin or pre-solve callbacks: arbiters updated in parallel
+    bint acceptInNarrow       # ... and one thread: the narrow phase also does SoftAcceptPair's part
     bint keepingPairs         # the broad phase's walk is being kept (SoftCollectPair)
     volatile long elastic     # a contact has restitution (set by SoftCountRange)
     volatile long customVelocity  # a body has its own velocity_func (SoftGatherRange)
@@ -469,6 +470,7 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef cpPairSlot *slot
     cdef cpFloat margin
     cdef const cpShape *pair[2]
+    cdef cpContact *dest
     for i in range(begin, end):
         p = &ctx.pairs[i]
         if i + SOFT_NARROW_PREFETCH < end:
@@ -506,7 +508,14 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
         else:
             c.id = 0
             c.guess = NULL
-        c.info = cpCollideSoft(p.a, p.b, c.id, c.contacts, margin)
+        dest = c.contacts
+        if ctx.acceptInNarrow:
+            # Straight into the contact buffer (this is the pairs' order):
+            # the copy from the candidate, and the candidate's bytes, saved.
+            dest = cpContactBufferGetArray(ctx.space)
+            if dest == NULL:
+                dest = c.contacts   # out of memory: the flag is up, the pair is skipped below
+        c.info = cpCollideSoft(p.a, p.b, c.id, dest, margin)
         ctx.touching[i] = ((SOFT_PAIR_TOUCHING | (c.info.count << SOFT_PAIR_COUNT_SHIFT))
                            if c.info.count > 0 else 0)
         if slot != NULL:
@@ -544,6 +553,12 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
                         ctx.touching[i] |= SOFT_PAIR_ACCEPTED
                     if c.contacts[0].bias < SOFT_YOUNG_AGE:
                         ctx.touching[i] |= SOFT_PAIR_YOUNG
+            if ctx.acceptInNarrow:
+                if dest != c.contacts:
+                    SoftAcceptPlaced(ctx, i, c, dest)
+                elif c.updated:
+                    c.arb.contacts = NULL
+                    c.arb.count = 0
 
 cdef inline void SoftPrefetchArbiter(cpSpace *space, SoftCandidate *c) noexcept nogil:
     cdef cpHashSet *arbs = space.cachedArbiters
@@ -650,6 +665,7 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     SoftProfileMark(SOFT_STAGE_BROAD_PHASE)
     ctx.pairArbiters = NULL
     ctx.destinations = NULL
+    ctx.acceptInNarrow = ctx.updateInNarrow and not ctx.threaded
     if ctx.updateInNarrow and ctx.threaded:
         ctx.destinations = <cpContact **>_reserve(space, SOFT_SCRATCH_DESTINATIONS, n,
                                                   sizeof(cpContact *))
@@ -657,6 +673,8 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
                                                   sizeof(cpArbiter *))
     SoftRun(ctx, SOFT_TASK_NARROW, 0, n, 0)
     SoftProfileMark(SOFT_STAGE_NARROW_PHASE)
+    if ctx.acceptInNarrow:
+        return
     if ctx.destinations == NULL or ctx.pairArbiters == NULL:
         # (One thread, handlers, or out of memory.)
         for i in range(n):
@@ -704,7 +722,6 @@ cdef void SoftAcceptPair(SoftContext *ctx, int i) noexcept nogil:
     cdef cpSpace *space = ctx.space
     cdef SoftCandidate *c = &ctx.candidates[i]
     cdef cpContact *contacts = cpContactBufferGetArray(space)
-    cdef cpArbiter *arb
     if contacts == NULL:
         # Out of memory: the flag is up, the pair is skipped.
         if c.updated:
@@ -712,6 +729,14 @@ cdef void SoftAcceptPair(SoftContext *ctx, int i) noexcept nogil:
             c.arb.count = 0
         return
     memcpy(contacts, c.contacts, c.info.count * sizeof(cpContact))
+    SoftAcceptPlaced(ctx, i, c, contacts)
+
+cdef void SoftAcceptPlaced(SoftContext *ctx, int i, SoftCandidate *c,
+                           cpContact *contacts) noexcept nogil:
+    # The rest of SoftAcceptPair, pair i's contacts being in the contact
+    # buffer at `contacts`.
+    cdef cpSpace *space = ctx.space
+    cdef cpArbiter *arb
     c.info.arr = contacts
     if c.updated:
         c.arb.contacts = contacts
