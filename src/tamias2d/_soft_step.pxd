@@ -11,7 +11,8 @@
 #                           or the last walk's, kept); * cheap rejection,
 #                           narrow phase and the lookup of cached arbiters;
 #                           arbiters and begin / pre_solve callbacks in the
-#                           broad phase's order
+#                           broad phase's order (on one thread without those
+#                           callbacks, within the narrow phase, pair by pair)
 #   SoftRethreadArbiters    unthread last step's arbiters if this step's differ
 #   cpSpaceProcessComponents, StageFilterArbiterCache       (shared)
 #   SoftGatherBodies        * awake bodies into SoftBody / SoftState / SoftMotion
