@@ -261,6 +261,8 @@ cdef struct SoftContext:
     cpFloat pushOut
     SoftSoftness contactSoft  # between two movable bodies
     SoftSoftness staticSoft   # against an immovable one (twice as stiff)
+    cpFloat contactCompliance[2]  # contactSoft's compliance, and over SOFT_RATIO_STIFFENING
+    cpFloat staticCompliance[2]   # the same of staticSoft
     SoftSoftness jointSoft    # the joints' position correction
 
 cdef inline int SoftIndex(cpBody *body, SoftBody *bodies, int count) noexcept nogil:
@@ -1101,8 +1103,16 @@ cdef inline cpFloat SoftPreload(SoftBody *a, SoftBody *b, cpFloat *maxStiffening
     maxStiffening[0] = SOFT_RATIO_STIFFENING
     return 0.0
 
-cdef inline void SoftPointSoftness(SoftPoint *sp, SoftSoftness *base, cpFloat load,
-                                   cpFloat size, cpFloat maxStiffening, cpFloat h) noexcept nogil:
+# A point's load filter once it is SOFT_LOAD_AGE steps old (SoftPrepareContact).
+cdef cpFloat _mature_smoothing = fmax(1.0 / SOFT_LOAD_AGE, SOFT_LOAD_SMOOTHING)
+
+cdef inline cpFloat SoftCompliance(const SoftSoftness *s) noexcept nogil:
+    # A softness as the compliance the solvers read: massScale and
+    # impulseScale are 1 / (1 + c) and c / (1 + c).
+    return s.impulseScale / s.massScale if s.massScale > 0.0 else 0.0
+
+cdef inline void SoftPointSoftness(SoftPoint *sp, cpFloat biasRate, cpFloat c, cpFloat cMin,
+                                   cpFloat load, cpFloat size, cpFloat h) noexcept nogil:
     # A soft contact settles where its bias balances the impulse it leaks:
     # (compliance / normalMass) * impulse = biasRate * depth. Under a load F
     # (impulse F h per substep) it sinks compliance F h / (normalMass
@@ -1111,19 +1121,17 @@ cdef inline void SoftPointSoftness(SoftPoint *sp, SoftSoftness *base, cpFloat lo
     # SOFT_MAX_LOAD_DEFLECTION x `size` leaks less (a smaller compliance); its bias
     # rate, which sets how fast overlap is pushed out, stays. That is the
     # implicit spring-damper with stiffness and damping both scaled up by
-    # the same factor, so its damping ratio is kept.
-    cdef cpFloat c, need
-    cdef SoftSoftness s = base[0]
-    c = s.impulseScale / s.massScale if s.massScale > 0.0 else 0.0
+    # the same factor, so its damping ratio is kept. c is the softness's
+    # compliance (SoftCompliance), cMin that over the largest stiffening
+    # allowed (SoftPreload): both worked out once a step.
+    cdef cpFloat need
     if load > 0.0 and c > 0.0 and size > 0.0:
-        need = SOFT_MAX_LOAD_DEFLECTION * size * sp.normalMass * s.biasRate / (load * h)
-        if need < c / maxStiffening:
-            need = c / maxStiffening
+        need = SOFT_MAX_LOAD_DEFLECTION * size * sp.normalMass * biasRate / (load * h)
+        if need < cMin:
+            need = cMin
         if need < c:
             c = need
-    # (The solvers read the softness as the compliance: massScale and
-    # impulseScale are 1 / (1 + c) and c / (1 + c).)
-    sp.biasRate = s.biasRate
+    sp.biasRate = biasRate
     sp.compliance = c
 
 
@@ -1253,7 +1261,8 @@ cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept 
     cdef SoftBody *b
     cdef SoftSoftness soft
     cdef cpFloat nx, ny, rnA, rnB, rtA, rtB, kN, kT, sep, warm, size, load
-    cdef cpFloat maxStiffening, preloadFraction, age, smoothing, pax, pay, pbx, pby
+    cdef cpFloat maxStiffening, preloadFraction, age, smoothing, pax, pay, pbx, pby, least
+    cdef const cpFloat *compliance
     cdef SoftState *sa
     cdef SoftState *sb
     sc.arb = arb
@@ -1290,8 +1299,13 @@ cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept 
     # Chipmunk adds surface_vr to the relative velocity; only its
     # tangential part is used for friction.
     sc.surfaceT = -arb.surface_vr.x * ny + arb.surface_vr.y * nx
-    soft = (ctx.staticSoft if (a.m_inv == 0.0 and a.i_inv == 0.0)
-            or (b.m_inv == 0.0 and b.i_inv == 0.0) else ctx.contactSoft)
+    if (a.m_inv == 0.0 and a.i_inv == 0.0) or (b.m_inv == 0.0 and b.i_inv == 0.0):
+        soft = ctx.staticSoft
+        compliance = ctx.staticCompliance
+    else:
+        soft = ctx.contactSoft
+        compliance = ctx.contactCompliance
+    least = compliance[0] if maxStiffening == 1.0 else compliance[1]
     sc.block = 0
     # Chipmunk skips the warm start of an arbiter's first step.
     warm = 0.0 if arb.state == CP_ARBITER_STATE_FIRST_COLLISION else ctx.warmCoef
@@ -1325,14 +1339,17 @@ cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept 
         age = con.bias if con.bias >= 0.0 else 0.0
         if age > SOFT_LOAD_AGE:
             age = SOFT_LOAD_AGE
-        smoothing = 1.0 / age if age >= 1.0 else 1.0
-        if smoothing < SOFT_LOAD_SMOOTHING:
-            smoothing = SOFT_LOAD_SMOOTHING
+        if age == SOFT_LOAD_AGE:
+            smoothing = _mature_smoothing   # (the same number, without the division)
+        else:
+            smoothing = 1.0 / age if age >= 1.0 else 1.0
+            if smoothing < SOFT_LOAD_SMOOTHING:
+                smoothing = SOFT_LOAD_SMOOTHING
         load = con.jBias + smoothing * (con.jnAcc * ctx.loadCoef - con.jBias)
         if warm == 0.0:
             load = 0.0
             age = 0.0
-        SoftPointSoftness(sp, &soft, load, size, maxStiffening, ctx.h)
+        SoftPointSoftness(sp, soft.biasRate, compliance[0], least, load, size, ctx.h)
         # The load as a substep's impulse (jnAcc is the step's).
         sp.preload = load * ctx.h * preloadFraction
         # Separation now, less the anchors' part, which the solver adds
@@ -2384,6 +2401,10 @@ cdef void SoftSetSubsteps(SoftContext *ctx, cpFloat dt, int substeps) noexcept n
     if staticHertz > 0.25 * ctx.inv_h:
         staticHertz = 0.25 * ctx.inv_h
     ctx.staticSoft = SoftMakeSoft(staticHertz, space.soft.contactDampingRatio, ctx.h)
+    ctx.contactCompliance[0] = SoftCompliance(&ctx.contactSoft)
+    ctx.contactCompliance[1] = ctx.contactCompliance[0] / SOFT_RATIO_STIFFENING
+    ctx.staticCompliance[0] = SoftCompliance(&ctx.staticSoft)
+    ctx.staticCompliance[1] = ctx.staticCompliance[0] / SOFT_RATIO_STIFFENING
     hertz = space.soft.jointHertz
     if hertz > 0.25 * ctx.inv_h:
         hertz = 0.25 * ctx.inv_h
