@@ -1249,6 +1249,13 @@ cdef void SoftCountRange(SoftContext *ctx, int begin, int end, bint atomic) noex
         ctx.contactSource[i] = i
         SoftCountContact(ctx, arb, i, atomic)
 
+cdef inline cpVect SoftSlotPosition(SoftContext *ctx, int slot, const cpBody *body) noexcept nogil:
+    # A body's position as gathered (slot 0's from the body: static or
+    # asleep), so that the bodies themselves are not read when preparing.
+    if slot != 0:
+        return cpv(ctx.motion[slot].px, ctx.motion[slot].py)
+    return body.p
+
 cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept nogil:
     # Contact n into *sc: its points' arms, masses, softness, separation and
     # warm start, and Chipmunk's fields of its cpContacts.
@@ -1261,7 +1268,8 @@ cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept 
     cdef SoftBody *b
     cdef SoftSoftness soft
     cdef cpFloat nx, ny, rnA, rnB, rtA, rtB, kN, kT, sep, warm, size, load
-    cdef cpFloat maxStiffening, preloadFraction, age, smoothing, pax, pay, pbx, pby, least
+    cdef cpFloat maxStiffening, preloadFraction, age, smoothing, least
+    cdef cpVect pa, pb
     cdef const cpFloat *compliance
     cdef SoftState *sa
     cdef SoftState *sb
@@ -1274,20 +1282,8 @@ cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept 
     sb = &ctx.states[sc.ib]
     sc.count = arb.count if arb.count <= 2 else 2
     sc.dst = arb.contacts
-    # The bodies' positions as gathered (slot 0's from the body: static or
-    # asleep), so that the bodies themselves are not read here.
-    if sc.ia != 0:
-        pax = ctx.motion[sc.ia].px
-        pay = ctx.motion[sc.ia].py
-    else:
-        pax = arb.body_a.p.x
-        pay = arb.body_a.p.y
-    if sc.ib != 0:
-        pbx = ctx.motion[sc.ib].px
-        pby = ctx.motion[sc.ib].py
-    else:
-        pbx = arb.body_b.p.x
-        pby = arb.body_b.p.y
+    pa = SoftSlotPosition(ctx, sc.ia, arb.body_a)
+    pb = SoftSlotPosition(ctx, sc.ib, arb.body_b)
     size = key.size
     preloadFraction = SoftPreload(a, b, &maxStiffening)
     nx = arb.n.x
@@ -1354,7 +1350,7 @@ cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept 
         sp.preload = load * ctx.h * preloadFraction
         # Separation now, less the anchors' part, which the solver adds
         # back from the bodies' motion within the step.
-        sep = ((sp.rBx - sp.rAx + pbx - pax) * nx + (sp.rBy - sp.rAy + pby - pay) * ny)
+        sep = ((sp.rBx - sp.rAx + pb.x - pa.x) * nx + (sp.rBy - sp.rAy + pb.y - pa.y) * ny)
         sp.baseSeparation = sep - ((sp.rBx - sp.rAx) * nx + (sp.rBy - sp.rAy) * ny)
         sp.relativeVelocity = ((sb.vx - sb.w * sp.rBy - sa.vx + sa.w * sp.rAy) * nx
                                + (sb.vy + sb.w * sp.rBx - sa.vy - sa.w * sp.rAx) * ny)
