@@ -544,6 +544,14 @@ cdef void FetchPairLists(Node **leaves, int count) noexcept nogil:
                 active += 1
 
 
+cdef void MarkBatch(Node **batch, int count, MarkContext *context) noexcept nogil:
+    # Leaves of a batch (MarkSubtree): their pair lists fetched, then marked.
+    cdef int i
+    FetchPairLists(batch, count)
+    for i in range(count):
+        MarkLeaf(batch[i], context)
+
+
 cdef void MarkSubtree(Node *subtree, MarkContext *context) noexcept nogil:
     # The leaves in depth-first order. When pairs are only collected
     # (slotFunc; no narrow phase runs between them to hide the misses),
@@ -553,7 +561,7 @@ cdef void MarkSubtree(Node *subtree, MarkContext *context) noexcept nogil:
     cdef NodeStack stack
     cdef Node *node
     cdef Node *batch[MARK_BATCH]
-    cdef int held = 0, i
+    cdef int held = 0
     cdef bint batching = context.slotFunc != NULL
     cdef cpTimestamp stamp = GetMasterTree(context.tree).stamp
     StackInit(&stack)
@@ -567,21 +575,17 @@ cdef void MarkSubtree(Node *subtree, MarkContext *context) noexcept nogil:
             if node.node.leaf.stamp != stamp:
                 batch[held] = node
                 held += 1
-                if held < MARK_BATCH:
-                    continue
-            FetchPairLists(batch, held)
-            for i in range(held):
-                MarkLeaf(batch[i], context)
-            if held < MARK_BATCH or batch[MARK_BATCH - 1] != node:
+                if held == MARK_BATCH:
+                    MarkBatch(batch, held, context)
+                    held = 0
+            else:
+                MarkBatch(batch, held, context)
+                held = 0
                 MarkLeaf(node, context)
-            held = 0
         else:
             StackPush(&stack, node.node.children.b)
             StackPush(&stack, node.node.children.a)
-    if held > 0:
-        FetchPairLists(batch, held)
-        for i in range(held):
-            MarkLeaf(batch[i], context)
+    MarkBatch(batch, held, context)
     StackFree(&stack)
 
 

@@ -204,7 +204,7 @@ cdef struct SoftCandidate:
 # one after the other): its movable bodies' slots (0: immovable) and its
 # lane kind (points - 1; -1: solved one by one, in the overflow). Beside
 # them, for its preparation, its bodies' slots and its size, found by the
-# count in arbiter order (where the shapes' boxes can be fetched ahead).
+# count in arbiter order (from what the narrow phase noted in the arbiter).
 cdef struct SoftColorKey:
     int a
     int b
@@ -1183,18 +1183,15 @@ cdef inline int SoftContactKind(const cpArbiter *arb, const SoftBody *a,
     cdef const cpContact *con = arb.contacts
     cdef cpFloat nx = arb.n.x
     cdef cpFloat ny = arb.n.y
-    cdef cpFloat mm = a.m_inv + b.m_inv
     cdef cpFloat rnA1 = con[0].r1.x * ny - con[0].r1.y * nx
     cdef cpFloat rnB1 = con[0].r2.x * ny - con[0].r2.y * nx
-    cdef cpFloat rnA2, rnB2, k11, k22, k12
-    k11 = mm + a.i_inv * rnA1 * rnA1 + b.i_inv * rnB1 * rnB1
+    cdef cpFloat k11, k22, k12
     if arb.count == 1:
+        # (The preparation's normal mass, 1 / this, is then above 0.)
+        k11 = a.m_inv + b.m_inv + a.i_inv * rnA1 * rnA1 + b.i_inv * rnB1 * rnB1
         return 0 if k11 > 0.0 else -1
-    rnA2 = con[1].r1.x * ny - con[1].r1.y * nx
-    rnB2 = con[1].r2.x * ny - con[1].r2.y * nx
-    k22 = mm + a.i_inv * rnA2 * rnA2 + b.i_inv * rnB2 * rnB2
-    k12 = mm + a.i_inv * rnA1 * rnA2 + b.i_inv * rnB1 * rnB2
-    if k11 > 0.0 and k22 > 0.0 and k11 * k11 < SOFT_BLOCK_MAX_CONDITION * (k11 * k22 - k12 * k12):
+    if SoftBlockMatrix(rnA1, rnB1, con[1].r1.x * ny - con[1].r1.y * nx,
+                       con[1].r2.x * ny - con[1].r2.y * nx, a, b, &k11, &k22, &k12):
         return 1
     return -1
 
@@ -1382,18 +1379,22 @@ cdef inline void SoftPrepareBlock(SoftContact *sc, SoftBody *a, SoftBody *b) noe
     # (as Box2D 2.x's block solver) keeps a box resting on two corners from
     # being tipped by the order in which they are solved: the sequential
     # order is what lets tall stacks buckle.
-    cdef SoftPoint *p1 = &sc.p[0]
-    cdef SoftPoint *p2 = &sc.p[1]
-    cdef cpFloat rnA1 = p1.rnA
-    cdef cpFloat rnB1 = p1.rnB
-    cdef cpFloat rnA2 = p2.rnA
-    cdef cpFloat rnB2 = p2.rnB
+    sc.block = SoftBlockMatrix(sc.p[0].rnA, sc.p[0].rnB, sc.p[1].rnA, sc.p[1].rnB, a, b,
+                               &sc.k11, &sc.k22, &sc.k12)
+
+cdef inline bint SoftBlockMatrix(cpFloat rnA1, cpFloat rnB1, cpFloat rnA2, cpFloat rnB2,
+                                 const SoftBody *a, const SoftBody *b, cpFloat *k11,
+                                 cpFloat *k22, cpFloat *k12) noexcept nogil:
+    # A two-point manifold's 2x2 normal mass matrix from its points' arms
+    # crossed with the normal, and whether its rows are solved together (a
+    # regular, well-conditioned matrix). The count's lane kind
+    # (SoftContactKind) and the preparation both ask here, so they agree.
     cdef cpFloat mm = a.m_inv + b.m_inv
-    sc.k11 = mm + a.i_inv * rnA1 * rnA1 + b.i_inv * rnB1 * rnB1
-    sc.k22 = mm + a.i_inv * rnA2 * rnA2 + b.i_inv * rnB2 * rnB2
-    sc.k12 = mm + a.i_inv * rnA1 * rnA2 + b.i_inv * rnB1 * rnB2
-    sc.block = (sc.k11 > 0.0 and sc.k22 > 0.0 and
-                sc.k11 * sc.k11 < SOFT_BLOCK_MAX_CONDITION * (sc.k11 * sc.k22 - sc.k12 * sc.k12))
+    k11[0] = mm + a.i_inv * rnA1 * rnA1 + b.i_inv * rnB1 * rnB1
+    k22[0] = mm + a.i_inv * rnA2 * rnA2 + b.i_inv * rnB2 * rnB2
+    k12[0] = mm + a.i_inv * rnA1 * rnA2 + b.i_inv * rnB1 * rnB2
+    return (k11[0] > 0.0 and k22[0] > 0.0 and
+            k11[0] * k11[0] < SOFT_BLOCK_MAX_CONDITION * (k11[0] * k22[0] - k12[0] * k12[0]))
 
 # -- the constraint graph: colours and lanes ------------------------------------------
 
