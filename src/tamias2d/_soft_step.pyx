@@ -1632,12 +1632,54 @@ cdef void SoftSolve(SoftContext *ctx, bint useBias) noexcept nogil:
     for i in range(SOFT_GRAPH_COLORS):
         SoftRun(ctx, SOFT_TASK_SOLVE, ctx.colorLanes[i], ctx.colorLanes[i + 1], useBias)
     for i in range(ctx.overflowCount):
-        SoftSolveContact(ctx, &ctx.contacts[ctx.overflow[i]], useBias)
+        SoftSolveContact(ctx, &ctx.contacts[ctx.overflow[i]], useBias, 1)
 
-cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias) noexcept nogil:
+cdef inline bint SoftPointBias(SoftContext *ctx, const SoftContact *sc, int j,
+                               const SoftState *sa, const SoftState *sb, bint useBias,
+                               cpFloat *bias, cpFloat *gamma, cpFloat *held) noexcept nogil:
+    # Point j's bias, compliance and held impulse for this pass; whether it
+    # is apart (speculative).
+    cdef const SoftPoint *sp = &sc.p[j]
+    cdef cpFloat nx = sc.nx
+    cdef cpFloat ny = sc.ny
+    cdef cpFloat prAx, prAy, prBx, prBy, dx, dy, s, rowK, limit
+    # The current separation from the bodies' motion in this step.
+    prAx = sa.qc * sp.rAx - sa.qs * sp.rAy
+    prAy = sa.qs * sp.rAx + sa.qc * sp.rAy
+    prBx = sb.qc * sp.rBx - sb.qs * sp.rBy
+    prBy = sb.qs * sp.rBx + sb.qc * sp.rBy
+    dx = (sb.dpx - sa.dpx) + (prBx - prAx)
+    dy = (sb.dpy - sa.dpy) + (prBy - prAy)
+    s = dx * nx + dy * ny + sp.baseSeparation
+    if s > 0.0:
+        # Speculative: let the gap close within the substep, no push.
+        bias[0] = s * ctx.inv_h
+        gamma[0] = 0.0
+        held[0] = 0.0
+        return 1
+    if useBias:
+        # Overlap is pushed out softly, at most at pushOut beyond the
+        # bias that holds the load the preload does not (the leak).
+        gamma[0] = sp.compliance
+        held[0] = fmin(sp.normalImpulse, sp.preload)
+        bias[0] = sp.biasRate * s
+        rowK = (sc.k11 if j == 0 else sc.k22) if sc.block else (
+            1.0 / sp.normalMass if sp.normalMass > 0.0 else 0.0)
+        limit = -ctx.pushOut - rowK * gamma[0] * (sp.normalImpulse - held[0])
+        if bias[0] < limit:
+            bias[0] = limit
+    else:
+        bias[0] = 0.0
+        gamma[0] = 0.0
+        held[0] = 0.0
+    return 0
+
+cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias,
+                           bint normals) noexcept nogil:
     # One contact of the overflow. Velocities along n and t are a shared
     # linear part plus each point's angular part (cross products prepared
-    # once per step).
+    # once per step). Without `normals` only its friction (a block's
+    # contact, whose normal rows SoftSolveBlock solves).
     cdef int j
     cdef SoftPoint *sp
     cdef SoftPoint *p1
@@ -1646,16 +1688,13 @@ cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias) noex
     cdef SoftBody *b
     cdef SoftState *sa
     cdef SoftState *sb
-    cdef cpFloat nx, ny, dx, dy, s, lin, vn, vt, imp, newImp, maxF
-    cdef cpFloat prAx, prAy, prBx, prBy
-    cdef cpFloat inv_h = ctx.inv_h
-    cdef cpFloat pushOut = ctx.pushOut
+    cdef cpFloat nx, ny, lin, vn, vt, imp, newImp, maxF
     cdef cpFloat vax, vay, wa, vbx, vby, wb, mA, iA, mB, iB
     cdef cpFloat a11, a22, a12, x01, x02, q1, q2, det, x1, x2, d1, d2
     cdef cpFloat bias[2]
     cdef cpFloat gamma[2]      # a soft row's compliance (0: rigid)
     cdef cpFloat held[2]       # the part of the warm start a soft row's preload holds
-    cdef cpFloat rowK, limit, rnA, rnB, kN, meanBias, meanGamma
+    cdef cpFloat rnA, rnB, kN, meanBias, meanGamma
     cdef int apart = 0         # rows whose points are apart (speculative)
     a = &ctx.bodies[sc.ia]
     b = &ctx.bodies[sc.ib]
@@ -1673,147 +1712,119 @@ cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias) noex
     iB = b.i_inv
     nx = sc.nx
     ny = sc.ny
-    for j in range(sc.count):
-        sp = &sc.p[j]
-        # The current separation from the bodies' motion in this step.
-        prAx = sa.qc * sp.rAx - sa.qs * sp.rAy
-        prAy = sa.qs * sp.rAx + sa.qc * sp.rAy
-        prBx = sb.qc * sp.rBx - sb.qs * sp.rBy
-        prBy = sb.qs * sp.rBx + sb.qc * sp.rBy
-        dx = (sb.dpx - sa.dpx) + (prBx - prAx)
-        dy = (sb.dpy - sa.dpy) + (prBy - prAy)
-        s = dx * nx + dy * ny + sp.baseSeparation
-        if s > 0.0:
-            # Speculative: let the gap close within the substep, no push.
-            bias[j] = s * inv_h
-            gamma[j] = 0.0
-            held[j] = 0.0
-            apart += 1
-        elif useBias:
-            # Overlap is pushed out softly, at most at pushOut beyond the
-            # bias that holds the load the preload does not (the leak).
-            gamma[j] = sp.compliance
-            held[j] = fmin(sp.normalImpulse, sp.preload)
-            bias[j] = sp.biasRate * s
-            rowK = (sc.k11 if j == 0 else sc.k22) if sc.block else (
-                1.0 / sp.normalMass if sp.normalMass > 0.0 else 0.0)
-            limit = -pushOut - rowK * gamma[j] * (sp.normalImpulse - held[j])
-            if bias[j] < limit:
-                bias[j] = limit
-        else:
-            bias[j] = 0.0
-            gamma[j] = 0.0
-            held[j] = 0.0
-    if sc.block:
-        # Both normal rows at once: the linear complementarity problem
-        # w = A x + q, x >= 0, w >= 0, x.w = 0 for the accumulated
-        # impulses x, with A = K + diag(k_ii gamma_i) and
-        # q = vn + bias - K x0 - diag(k_ii gamma_i) held. A soft row's added
-        # diagonal is the soft constraint written as a compliance: (k + k
-        # gamma) dx = -(vn + bias) - k gamma (x0 - held) is the sequential
-        # massScale / impulseScale update exactly (with held 0). Cases in
-        # Box2D 2.x's order.
-        p1 = &sc.p[0]
-        p2 = &sc.p[1]
-        lin = (vbx - vax) * nx + (vby - vay) * ny
-        x01 = p1.normalImpulse
-        x02 = p2.normalImpulse
-        a12 = sc.k12
-        a11 = sc.k11 * (1.0 + gamma[0])
-        a22 = sc.k22 * (1.0 + gamma[1])
-        q1 = (lin + wb * p1.rnB - wa * p1.rnA + bias[0]
-              - (sc.k11 * x01 + a12 * x02) - sc.k11 * gamma[0] * held[0])
-        q2 = (lin + wb * p2.rnB - wa * p2.rnA + bias[1]
-              - (a12 * x01 + sc.k22 * x02) - sc.k22 * gamma[1] * held[1])
-        det = a11 * a22 - a12 * a12
-        x1 = (a12 * q2 - a22 * q1) / det
-        x2 = (a12 * q1 - a11 * q2) / det
-        if not (x1 >= 0.0 and x2 >= 0.0):
-            # Only the first point pushes.
-            x1 = -q1 / a11
-            x2 = 0.0
-            if not (x1 >= 0.0 and a12 * x1 + q2 >= 0.0):
-                # Only the second.
-                x1 = 0.0
-                x2 = -q2 / a22
-                if not (x2 >= 0.0 and a12 * x2 + q1 >= 0.0):
-                    # Neither: both separate; with no solution at all
-                    # (round-off) the impulses stay.
-                    x1 = 0.0
-                    x2 = 0.0
-                    if not (q1 >= 0.0 and q2 >= 0.0):
-                        x1 = x01
-                        x2 = x02
-        d1 = x1 - x01
-        d2 = x2 - x02
-        p1.normalImpulse = x1
-        p2.normalImpulse = x2
-        if x1 > p1.maxNormalImpulse:
-            p1.maxNormalImpulse = x1
-        if x2 > p2.maxNormalImpulse:
-            p2.maxNormalImpulse = x2
-        imp = d1 + d2
-        vax -= mA * imp * nx
-        vay -= mA * imp * ny
-        wa -= iA * (p1.rnA * d1 + p2.rnA * d2)
-        vbx += mB * imp * nx
-        vby += mB * imp * ny
-        wb += iB * (p1.rnB * d1 + p2.rnB * d2)
-    elif sc.count == 2 and apart == 0:
-        # Two touching points too close for the block solve (the rows
-        # nearly the same): one row at their midpoint, its impulse shared
-        # equally. One after the other, the first point would take the
-        # whole load wherever it is, and a load off the centre turns the
-        # body: a many-sided polygon rolls from rest on it and speeds up.
-        # (Where one point is apart, the other alone touches: the rows stay
-        # separate.)
-        p1 = &sc.p[0]
-        p2 = &sc.p[1]
-        rnA = 0.5 * (p1.rnA + p2.rnA)
-        rnB = 0.5 * (p1.rnB + p2.rnB)
-        kN = mA + mB + iA * rnA * rnA + iB * rnB * rnB
-        x01 = p1.normalImpulse + p2.normalImpulse
-        vn = ((vbx - vax) * nx + (vby - vay) * ny) + wb * rnB - wa * rnA
-        meanBias = 0.5 * (bias[0] + bias[1])
-        meanGamma = 0.5 * (gamma[0] + gamma[1])
-        imp = ((-(vn + meanBias) / kN - meanGamma * (x01 - held[0] - held[1])) / (1.0 + meanGamma)
-               if kN > 0.0 else 0.0)
-        newImp = x01 + imp
-        if newImp < 0.0:
-            newImp = 0.0
-        imp = newImp - x01
-        p1.normalImpulse = 0.5 * newImp
-        p2.normalImpulse = 0.5 * newImp
-        if p1.normalImpulse > p1.maxNormalImpulse:
-            p1.maxNormalImpulse = p1.normalImpulse
-        if p2.normalImpulse > p2.maxNormalImpulse:
-            p2.maxNormalImpulse = p2.normalImpulse
-        vax -= mA * imp * nx
-        vay -= mA * imp * ny
-        wa -= iA * imp * rnA
-        vbx += mB * imp * nx
-        vby += mB * imp * ny
-        wb += iB * imp * rnB
-    else:
+    if normals:
         for j in range(sc.count):
-            sp = &sc.p[j]
-            # (k + k gamma) dx = -(vn + bias) - k gamma (x0 - held), k = 1 / normalMass
-            vn = ((vbx - vax) * nx + (vby - vay) * ny) + wb * sp.rnB - wa * sp.rnA
-            imp = (-(sp.normalMass * (vn + bias[j]) + gamma[j] * (sp.normalImpulse - held[j]))
-                   / (1.0 + gamma[j]))
-            newImp = sp.normalImpulse + imp
-            if newImp < 0.0:
-                newImp = 0.0
-            imp = newImp - sp.normalImpulse
-            sp.normalImpulse = newImp
-            if newImp > sp.maxNormalImpulse:
-                sp.maxNormalImpulse = newImp
+            apart += SoftPointBias(ctx, sc, j, sa, sb, useBias, &bias[j], &gamma[j], &held[j])
+        if sc.block:
+            # Both normal rows at once: the linear complementarity problem
+            # w = A x + q, x >= 0, w >= 0, x.w = 0 for the accumulated
+            # impulses x, with A = K + diag(k_ii gamma_i) and
+            # q = vn + bias - K x0 - diag(k_ii gamma_i) held. A soft row's added
+            # diagonal is the soft constraint written as a compliance: (k + k
+            # gamma) dx = -(vn + bias) - k gamma (x0 - held) is the sequential
+            # massScale / impulseScale update exactly (with held 0). Cases in
+            # Box2D 2.x's order.
+            p1 = &sc.p[0]
+            p2 = &sc.p[1]
+            lin = (vbx - vax) * nx + (vby - vay) * ny
+            x01 = p1.normalImpulse
+            x02 = p2.normalImpulse
+            a12 = sc.k12
+            a11 = sc.k11 * (1.0 + gamma[0])
+            a22 = sc.k22 * (1.0 + gamma[1])
+            q1 = (lin + wb * p1.rnB - wa * p1.rnA + bias[0]
+                  - (sc.k11 * x01 + a12 * x02) - sc.k11 * gamma[0] * held[0])
+            q2 = (lin + wb * p2.rnB - wa * p2.rnA + bias[1]
+                  - (a12 * x01 + sc.k22 * x02) - sc.k22 * gamma[1] * held[1])
+            det = a11 * a22 - a12 * a12
+            x1 = (a12 * q2 - a22 * q1) / det
+            x2 = (a12 * q1 - a11 * q2) / det
+            if not (x1 >= 0.0 and x2 >= 0.0):
+                # Only the first point pushes.
+                x1 = -q1 / a11
+                x2 = 0.0
+                if not (x1 >= 0.0 and a12 * x1 + q2 >= 0.0):
+                    # Only the second.
+                    x1 = 0.0
+                    x2 = -q2 / a22
+                    if not (x2 >= 0.0 and a12 * x2 + q1 >= 0.0):
+                        # Neither: both separate; with no solution at all
+                        # (round-off) the impulses stay.
+                        x1 = 0.0
+                        x2 = 0.0
+                        if not (q1 >= 0.0 and q2 >= 0.0):
+                            x1 = x01
+                            x2 = x02
+            d1 = x1 - x01
+            d2 = x2 - x02
+            p1.normalImpulse = x1
+            p2.normalImpulse = x2
+            if x1 > p1.maxNormalImpulse:
+                p1.maxNormalImpulse = x1
+            if x2 > p2.maxNormalImpulse:
+                p2.maxNormalImpulse = x2
+            imp = d1 + d2
             vax -= mA * imp * nx
             vay -= mA * imp * ny
-            wa -= iA * imp * sp.rnA
+            wa -= iA * (p1.rnA * d1 + p2.rnA * d2)
             vbx += mB * imp * nx
             vby += mB * imp * ny
-            wb += iB * imp * sp.rnB
+            wb += iB * (p1.rnB * d1 + p2.rnB * d2)
+        elif sc.count == 2 and apart == 0:
+            # Two touching points too close for the block solve (the rows
+            # nearly the same): one row at their midpoint, its impulse shared
+            # equally. One after the other, the first point would take the
+            # whole load wherever it is, and a load off the centre turns the
+            # body: a many-sided polygon rolls from rest on it and speeds up.
+            # (Where one point is apart, the other alone touches: the rows stay
+            # separate.)
+            p1 = &sc.p[0]
+            p2 = &sc.p[1]
+            rnA = 0.5 * (p1.rnA + p2.rnA)
+            rnB = 0.5 * (p1.rnB + p2.rnB)
+            kN = mA + mB + iA * rnA * rnA + iB * rnB * rnB
+            x01 = p1.normalImpulse + p2.normalImpulse
+            vn = ((vbx - vax) * nx + (vby - vay) * ny) + wb * rnB - wa * rnA
+            meanBias = 0.5 * (bias[0] + bias[1])
+            meanGamma = 0.5 * (gamma[0] + gamma[1])
+            imp = ((-(vn + meanBias) / kN - meanGamma * (x01 - held[0] - held[1])) / (1.0 + meanGamma)
+                   if kN > 0.0 else 0.0)
+            newImp = x01 + imp
+            if newImp < 0.0:
+                newImp = 0.0
+            imp = newImp - x01
+            p1.normalImpulse = 0.5 * newImp
+            p2.normalImpulse = 0.5 * newImp
+            if p1.normalImpulse > p1.maxNormalImpulse:
+                p1.maxNormalImpulse = p1.normalImpulse
+            if p2.normalImpulse > p2.maxNormalImpulse:
+                p2.maxNormalImpulse = p2.normalImpulse
+            vax -= mA * imp * nx
+            vay -= mA * imp * ny
+            wa -= iA * imp * rnA
+            vbx += mB * imp * nx
+            vby += mB * imp * ny
+            wb += iB * imp * rnB
+        else:
+            for j in range(sc.count):
+                sp = &sc.p[j]
+                # (k + k gamma) dx = -(vn + bias) - k gamma (x0 - held), k = 1 / normalMass
+                vn = ((vbx - vax) * nx + (vby - vay) * ny) + wb * sp.rnB - wa * sp.rnA
+                imp = (-(sp.normalMass * (vn + bias[j]) + gamma[j] * (sp.normalImpulse - held[j]))
+                       / (1.0 + gamma[j]))
+                newImp = sp.normalImpulse + imp
+                if newImp < 0.0:
+                    newImp = 0.0
+                imp = newImp - sp.normalImpulse
+                sp.normalImpulse = newImp
+                if newImp > sp.maxNormalImpulse:
+                    sp.maxNormalImpulse = newImp
+                vax -= mA * imp * nx
+                vay -= mA * imp * ny
+                wa -= iA * imp * sp.rnA
+                vbx += mB * imp * nx
+                vby += mB * imp * ny
+                wb += iB * imp * sp.rnB
     if not useBias:
         # Friction only in the relax pass, as Box2D 3.2 does: there the
         # normal impulses that bound it are final for the substep.
@@ -1859,7 +1870,7 @@ cdef void SoftRelax(SoftContext *ctx, bint last) noexcept nogil:
         SoftRun(ctx, SOFT_TASK_RELAX_ACCUMULATE, ctx.colorLanes[i], ctx.colorLanes[i + 1], 0)
     for i in range(ctx.overflowCount):
         sc = &ctx.contacts[ctx.overflow[i]]
-        SoftSolveContact(ctx, sc, 0)
+        SoftSolveContact(ctx, sc, 0, 1)
     for i in range(ctx.overflowCount):
         sc = &ctx.contacts[ctx.overflow[i]]
         for j in range(sc.count):
