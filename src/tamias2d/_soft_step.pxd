@@ -80,12 +80,29 @@ cdef const cpFloat SOFT_PRELOAD_CHAIN = 1.0
 # not fixed by the bodies' weights: with all of it there the loads wander
 # from contact to contact and a 40-row pyramid never comes to rest ...
 cdef const cpFloat SOFT_PRELOAD_WEB = 0.7
-# ... and none between bodies whose masses differ more than this (a heavy
-# body on a light one bounces on a preloaded contact: Gauss-Seidel does not
-# converge there within a step). Such a point is stiffened instead so that
-# its load sinks it at most SOFT_MAX_LOAD_DEFLECTION of the smaller body's
-# size, up to SOFT_RATIO_STIFFENING times (SoftPointSoftness).
+# ... and none between bodies whose masses differ more than this where they
+# are solved one contact after the other (a block too large for
+# SoftSolveBlock): a heavy body on a light one bounces on a preloaded
+# contact, as Gauss-Seidel does not converge there within a step. Such a
+# point is stiffened instead so that its load sinks it at most
+# SOFT_MAX_LOAD_DEFLECTION of the smaller body's size, up to
+# SOFT_RATIO_STIFFENING times (SoftPointSoftness).
 cdef const cpFloat SOFT_PRELOAD_MAX_RATIO = 300.0
+# A body with a movable neighbour this many times heavier is light: the
+# rows of all the contacts of the light bodies that touch (a block) are
+# solved together, exactly (SoftSolveBlock), in place of one contact after
+# the other, which takes about the ratio in passes to carry a heavy body's
+# weight through a light one (and meanwhile the heavy body sinks into it).
+# A block's contacts are fully preloaded (SoftPreload).
+cdef const cpFloat SOFT_BLOCK_RATIO = 30.0
+# Blocks of up to this many rows (a normal and a tangent row per contact
+# point); the contacts of a larger one are solved one by one, as any.
+cdef enum:
+    SOFT_BLOCK_ROWS = 48
+# A body no heavier than a light one it touches is light too (it carries the
+# heavy load), up to this many contacts from a heavy body.
+cdef enum:
+    SOFT_BLOCK_SPREAD = 4
 cdef const cpFloat SOFT_MAX_LOAD_DEFLECTION = 0.005
 cdef const cpFloat SOFT_RATIO_STIFFENING = 5.0
 # The load moves this fraction of the way to the last step's load per step
@@ -216,6 +233,7 @@ cdef struct SoftContact:
     cpFloat surfaceT          # surface velocity along the tangent
     cpFloat k11, k12, k22     # normal effective-mass matrix of a two-point manifold
     bint block                # solve the two normal rows together (well conditioned)
+    bint inBlock              # its normal rows are solved in a light body's block (SoftSolveBlock)
     SoftPoint p[2]
     cpArbiter *arb
 

@@ -146,6 +146,7 @@ cdef enum:
     SOFT_SCRATCH_CHANGED_IN   # the restitution pass that last changed each body
     SOFT_SCRATCH_DESTINATIONS # where each pair's contacts go in the contact buffers (SoftCollide)
     SOFT_SCRATCH_PAIR_ARBITERS  # each updated pair's arbiter, packed (SoftCollide)
+    SOFT_SCRATCH_BLOCKS       # the light bodies and their contacts (SoftFindBlocks)
     SOFT_SCRATCH_COUNT
 
 # (cpSoftScratch holds 20 buffers.)
@@ -211,6 +212,7 @@ cdef struct SoftColorKey:
     int kind
     int ia
     int ib
+    int block                 # it touches a light body solved as a block (SoftFindBlocks)
     cpFloat size              # SoftContactSize
 
 cdef struct SoftContext:
@@ -246,6 +248,11 @@ cdef struct SoftContext:
     volatile long customVelocity  # a body has its own velocity_func (SoftGatherRange)
     volatile long customPosition  # ... position_func
     volatile long emptyArbiter    # an arbiter has no contacts (SoftCountRange)
+    volatile long ratioPairs      # a contact's bodies' masses differ SOFT_BLOCK_RATIO times or more
+    int *blockBodies          # each block's root body (SoftFindBlocks), in slot order
+    int blockBodyCount
+    int *blockHead            # per root body slot: its block's first contact, -1: none
+    int *blockNext            # per contact: the next one of its block
     int threadedCount         # last step's arbiters left threaded (-1: unthreaded as Munk2D)
     bint threaded             # stages may run on the pool (SoftRun)
     bint serialVelocities     # a body has its own velocity_func (Python: one thread)
@@ -1079,7 +1086,8 @@ cdef inline cpFloat SoftContactSize(const cpArbiter *arb, const SoftBody *a, con
         return sa
     return fmin(sa, sb)
 
-cdef inline cpFloat SoftPreload(SoftBody *a, SoftBody *b, cpFloat *maxStiffening) noexcept nogil:
+cdef inline cpFloat SoftPreload(SoftBody *a, SoftBody *b, bint inBlock,
+                                cpFloat *maxStiffening) noexcept nogil:
     # The fraction of a point's load its spring holds at no depth. A soft
     # contact settles where its bias balances the impulse it leaks, so under
     # a load it sinks in proportion to the load: the bottom of a tall stack
@@ -1094,7 +1102,8 @@ cdef inline cpFloat SoftPreload(SoftBody *a, SoftBody *b, cpFloat *maxStiffening
     maxStiffening[0] = 1.0
     if (a.body != NULL and a.contacts > 2) or (b.body != NULL and b.contacts > 2):
         return SOFT_PRELOAD_WEB
-    if a.m_inv == 0.0 or b.m_inv == 0.0:
+    if a.m_inv == 0.0 or b.m_inv == 0.0 or inBlock:
+        # (A block's rows carry a heavy body's load through at once.)
         return SOFT_PRELOAD_CHAIN
     lo = fmin(a.m_inv, b.m_inv)
     hi = fmax(a.m_inv, b.m_inv)
@@ -1159,6 +1168,8 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     # On the pool; an arbiter without contacts (only after a failed
     # allocation) makes it all be done again here, skipping those.
     tamias_store(&ctx.emptyArbiter, 0)
+    tamias_store(&ctx.ratioPairs, 0)
+    ctx.blockBodyCount = 0
     SoftRun(ctx, SOFT_TASK_COUNT, 0, arbiters.num, ctx.threaded)
     if tamias_load(&ctx.emptyArbiter):
         for i in range(1, ctx.bodyCount):
@@ -1173,6 +1184,8 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     else:
         n = arbiters.num
     ctx.contactCount = n
+    if tamias_load(&ctx.ratioPairs):
+        return SoftFindBlocks(ctx)
     return 1
 
 cdef inline int SoftContactKind(const cpArbiter *arb, const SoftBody *a,
@@ -1195,6 +1208,116 @@ cdef inline int SoftContactKind(const cpArbiter *arb, const SoftBody *a,
         return 1
     return -1
 
+cdef inline int SoftLighterSide(const SoftBody *a, const SoftBody *b) noexcept nogil:
+    # 1 if A is SOFT_BLOCK_RATIO times lighter than B or more, 2 if B than
+    # A, else 0 (both movable).
+    if a.m_inv >= SOFT_BLOCK_RATIO * b.m_inv:
+        return 1
+    if b.m_inv >= SOFT_BLOCK_RATIO * a.m_inv:
+        return 2
+    return 0
+
+cdef inline int SoftBlockRoot(int *parent, int slot) noexcept nogil:
+    while parent[slot] != slot:
+        parent[slot] = parent[parent[slot]]
+        slot = parent[slot]
+    return slot
+
+cdef bint SoftFindBlocks(SoftContext *ctx) noexcept nogil:
+    # The light bodies: those with a movable neighbour SOFT_BLOCK_RATIO
+    # times heavier or more, then those no heavier than a light body they
+    # touch (what a light body rests on carries the heavy load too), up to
+    # SOFT_BLOCK_SPREAD contacts away. Light bodies that touch are one
+    # block; a block's contacts (all that touch its bodies) go to the
+    # overflow, and their normal rows are solved together (SoftSolveBlock).
+    # Only in a step with such a pair (ctx.ratioPairs).
+    cdef int n = ctx.contactCount
+    cdef int nb = ctx.bodyCount
+    cdef int *lists = <int *>_reserve(ctx.space, SOFT_SCRATCH_BLOCKS, 4 * nb + n, sizeof(int))
+    cdef int *light
+    cdef int *parent
+    cdef SoftColorKey *key
+    cdef cpArbiter *arb
+    cdef int i, side, round, root, ra, rb
+    cdef bint grown
+    if lists == NULL:
+        return 0
+    light = lists
+    parent = lists + nb
+    ctx.blockHead = lists + 2 * nb
+    ctx.blockBodies = lists + 3 * nb
+    ctx.blockNext = lists + 4 * nb
+    memset(light, 0, <size_t>nb * sizeof(int))
+    for i in range(n):
+        key = &ctx.colorKeys[i]
+        if key.a != 0 and key.b != 0:
+            side = SoftLighterSide(&ctx.bodies[key.ia], &ctx.bodies[key.ib])
+            if side == 1:
+                light[key.ia] = 1
+            elif side == 2:
+                light[key.ib] = 1
+    # Spread: in round r a body becomes light (light = r + 1) from one that
+    # was light before the round (1 <= light <= r).
+    for round in range(1, SOFT_BLOCK_SPREAD + 1):
+        grown = 0
+        for i in range(n):
+            key = &ctx.colorKeys[i]
+            if key.a == 0 or key.b == 0:
+                continue
+            if 1 <= light[key.ia] <= round and light[key.ib] == 0:
+                if ctx.bodies[key.ib].m_inv >= ctx.bodies[key.ia].m_inv:
+                    light[key.ib] = round + 1
+                    grown = 1
+            elif 1 <= light[key.ib] <= round and light[key.ia] == 0:
+                if ctx.bodies[key.ia].m_inv >= ctx.bodies[key.ib].m_inv:
+                    light[key.ia] = round + 1
+                    grown = 1
+        if not grown:
+            break
+    for i in range(nb):
+        parent[i] = i
+        ctx.blockHead[i] = -1
+    for i in range(n):
+        key = &ctx.colorKeys[i]
+        if key.a != 0 and key.b != 0 and light[key.ia] and light[key.ib]:
+            ra = SoftBlockRoot(parent, key.ia)
+            rb = SoftBlockRoot(parent, key.ib)
+            if ra != rb:
+                # (The lower slot is the root: the same blocks whatever the order.)
+                parent[rb if ra < rb else ra] = ra if ra < rb else rb
+    # Each contact's block (its light body's root), and each block's rows
+    # in the relax passes (light[] reused: at the roots): a block with more
+    # than SOFT_BLOCK_ROWS is not one, its contacts are solved as any.
+    for i in range(n):
+        key = &ctx.colorKeys[i]
+        root = -1
+        if key.ia != 0 and light[key.ia]:
+            root = SoftBlockRoot(parent, key.ia)
+        elif key.ib != 0 and light[key.ib]:
+            root = SoftBlockRoot(parent, key.ib)
+        ctx.blockNext[i] = root
+    memset(light, 0, <size_t>nb * sizeof(int))
+    for i in range(n):
+        if ctx.blockNext[i] >= 0:
+            arb = <cpArbiter *>ctx.space.arbiters.arr[ctx.contactSource[i]]
+            light[ctx.blockNext[i]] += 2 * (arb.count if arb.count <= 2 else 2)
+    # Each block's contacts, in arbiter order; the blocks in their roots' order.
+    for i in range(n - 1, -1, -1):
+        key = &ctx.colorKeys[i]
+        root = ctx.blockNext[i]
+        ctx.blockNext[i] = -1
+        if root >= 0 and light[root] <= SOFT_BLOCK_ROWS:
+            ctx.blockNext[i] = ctx.blockHead[root]
+            ctx.blockHead[root] = i
+            key.kind = -1
+            key.block = 1
+    ctx.blockBodyCount = 0
+    for i in range(1, nb):
+        if ctx.blockHead[i] >= 0:
+            ctx.blockBodies[ctx.blockBodyCount] = i
+            ctx.blockBodyCount += 1
+    return 1
+
 cdef inline int SoftNotedIndex(int guess, cpBody *body, SoftContext *ctx) noexcept nogil:
     # SoftIndex, from the slot the narrow phase noted where it is right (the
     # body itself stays out of cache).
@@ -1215,6 +1338,9 @@ cdef inline void SoftCountContact(SoftContext *ctx, cpArbiter *arb, int n, bint 
     key.b = ib if SoftMovable(ctx, ib) else 0
     key.kind = SoftContactKind(arb, &ctx.bodies[ia], &ctx.bodies[ib])
     key.size = SoftContactSize(arb, &ctx.bodies[ia], &ctx.bodies[ib], noted)
+    key.block = 0
+    if key.a != 0 and key.b != 0 and SoftLighterSide(&ctx.bodies[ia], &ctx.bodies[ib]) != 0:
+        tamias_store(&ctx.ratioPairs, 1)
     if arb.e != 0.0:
         tamias_store(&ctx.elastic, 1)
     if atomic:
@@ -1282,7 +1408,8 @@ cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept 
     pa = SoftSlotPosition(ctx, sc.ia, arb.body_a)
     pb = SoftSlotPosition(ctx, sc.ib, arb.body_b)
     size = key.size
-    preloadFraction = SoftPreload(a, b, &maxStiffening)
+    sc.inBlock = key.block
+    preloadFraction = SoftPreload(a, b, key.block, &maxStiffening)
     nx = arb.n.x
     ny = arb.n.y
     sc.nx = nx
@@ -1631,18 +1758,397 @@ cdef void SoftSolve(SoftContext *ctx, bint useBias) noexcept nogil:
     cdef int i
     for i in range(SOFT_GRAPH_COLORS):
         SoftRun(ctx, SOFT_TASK_SOLVE, ctx.colorLanes[i], ctx.colorLanes[i + 1], useBias)
+    SoftSolveOverflow(ctx, useBias)
+
+cdef void SoftSolveOverflow(SoftContext *ctx, bint useBias) noexcept nogil:
+    # The overflow one by one, then the blocks (SoftSolveBlock).
+    cdef int i
+    cdef SoftContact *sc
     for i in range(ctx.overflowCount):
-        SoftSolveContact(ctx, &ctx.contacts[ctx.overflow[i]], useBias, 1)
+        sc = &ctx.contacts[ctx.overflow[i]]
+        if not sc.inBlock:
+            SoftSolveContact(ctx, sc, useBias, 1)
+    for i in range(ctx.blockBodyCount):
+        if not SoftSolveBlock(ctx, ctx.blockBodies[i], useBias):
+            # Too many rows, or no solution found: one by one.
+            SoftEachBlockContact(ctx, ctx.blockBodies[i], useBias, 1)
+
+# A block's points: each point of each of its contacts. Its rows are their
+# normal rows, then (in the relax passes) their tangent rows.
+cdef struct SoftBlockRows:
+    int n                     # points
+    SoftContact *contact[SOFT_BLOCK_ROWS]
+    int point[SOFT_BLOCK_ROWS]
+
+cdef inline bint SoftBlockGather(SoftContext *ctx, int root, int perPoint,
+                                 SoftBlockRows *rows) noexcept nogil:
+    # Block root's points; false beyond SOFT_BLOCK_ROWS rows (perPoint per
+    # point).
+    cdef int c = ctx.blockHead[root]
+    cdef int j
+    cdef SoftContact *sc
+    rows.n = 0
+    while c >= 0:
+        sc = &ctx.contacts[c]
+        if (rows.n + sc.count) * perPoint > SOFT_BLOCK_ROWS:
+            return 0
+        for j in range(sc.count):
+            rows.contact[rows.n] = sc
+            rows.point[rows.n] = j
+            rows.n += 1
+        c = ctx.blockNext[c]
+    return 1
+
+cdef inline void SoftBlockJacobian(const SoftBlockRows *rows, int r, cpFloat *dx, cpFloat *dy,
+                                   cpFloat *armA, cpFloat *armB) noexcept nogil:
+    # Row r's direction and arms: a normal row n and cross(r, n), a tangent
+    # row (r >= n points) t = perp(n) and cross(r, t) = r . n; on B +J, on
+    # A -J.
+    cdef bint tangent = r >= rows.n
+    cdef const SoftContact *sc = rows.contact[r - rows.n if tangent else r]
+    cdef const SoftPoint *sp = &sc.p[rows.point[r - rows.n if tangent else r]]
+    if tangent:
+        dx[0] = -sc.ny
+        dy[0] = sc.nx
+        armA[0] = sp.rtA
+        armB[0] = sp.rtB
+    else:
+        dx[0] = sc.nx
+        dy[0] = sc.ny
+        armA[0] = sp.rnA
+        armB[0] = sp.rnB
+
+cdef inline const SoftContact *SoftBlockContact(const SoftBlockRows *rows, int r) noexcept nogil:
+    return rows.contact[r - rows.n if r >= rows.n else r]
+
+cdef void SoftBlockDelassus(SoftContext *ctx, const SoftBlockRows *rows, int m,
+                            cpFloat M[][SOFT_BLOCK_ROWS]) noexcept nogil:
+    # M = J W J' over the first m rows (W the bodies' inverse masses and
+    # inertias): rows r and t meet where they share a movable body.
+    cdef int r, t, u, v, slot
+    cdef int body[2][2]
+    cdef cpFloat dx[2]
+    cdef cpFloat dy[2]
+    cdef cpFloat arm[2][2]
+    cdef cpFloat k, sign
+    cdef const SoftBody *bd
+    for r in range(m):
+        SoftBlockJacobian(rows, r, &dx[0], &dy[0], &arm[0][0], &arm[0][1])
+        body[0][0] = SoftBlockContact(rows, r).ia
+        body[0][1] = SoftBlockContact(rows, r).ib
+        for t in range(r + 1):
+            SoftBlockJacobian(rows, t, &dx[1], &dy[1], &arm[1][0], &arm[1][1])
+            body[1][0] = SoftBlockContact(rows, t).ia
+            body[1][1] = SoftBlockContact(rows, t).ib
+            k = 0.0
+            for u in range(2):
+                for v in range(2):
+                    slot = body[0][u]
+                    if slot == 0 or slot != body[1][v]:
+                        continue
+                    bd = &ctx.bodies[slot]
+                    sign = 1.0 if u == v else -1.0
+                    k += sign * (bd.m_inv * (dx[0] * dx[1] + dy[0] * dy[1])
+                                 + bd.i_inv * arm[0][u] * arm[1][v])
+            M[r][t] = k
+            M[t][r] = k
+
+cdef inline cpFloat SoftBlockSpeed(SoftContext *ctx, const SoftBlockRows *rows,
+                                   int r) noexcept nogil:
+    # B's speed against A at row r's point, along its direction.
+    cdef cpFloat dx, dy, armA, armB
+    cdef const SoftContact *sc = SoftBlockContact(rows, r)
+    cdef const SoftState *sa = &ctx.states[sc.ia]
+    cdef const SoftState *sb = &ctx.states[sc.ib]
+    SoftBlockJacobian(rows, r, &dx, &dy, &armA, &armB)
+    return ((sb.vx - sa.vx) * dx + (sb.vy - sa.vy) * dy) + sb.w * armB - sa.w * armA
+
+cdef void SoftBlockApply(SoftContext *ctx, const SoftBlockRows *rows, int m,
+                         const cpFloat *d) noexcept nogil:
+    # The impulses d along the first m rows on the bodies (slot 0 never
+    # written).
+    cdef int r
+    cdef cpFloat dx, dy, armA, armB
+    cdef const SoftContact *sc
+    cdef SoftState *st
+    cdef const SoftBody *bd
+    for r in range(m):
+        sc = SoftBlockContact(rows, r)
+        SoftBlockJacobian(rows, r, &dx, &dy, &armA, &armB)
+        if sc.ia != 0:
+            bd = &ctx.bodies[sc.ia]
+            st = &ctx.states[sc.ia]
+            st.vx -= bd.m_inv * d[r] * dx
+            st.vy -= bd.m_inv * d[r] * dy
+            st.w -= bd.i_inv * d[r] * armA
+        if sc.ib != 0:
+            bd = &ctx.bodies[sc.ib]
+            st = &ctx.states[sc.ib]
+            st.vx += bd.m_inv * d[r] * dx
+            st.vy += bd.m_inv * d[r] * dy
+            st.w += bd.i_inv * d[r] * armB
+
+cdef bint SoftSolveBlock(SoftContext *ctx, int root, bint useBias) noexcept nogil:
+    # All of a block's contact rows at once: the linear complementarity
+    # problem w = M x + q over their accumulated impulses x, with
+    # M = K + diag(k_r gamma_r), K = J W J', q = v + bias - K x0
+    # - diag(k_r gamma_r) held (a soft row's compliance on its diagonal, as
+    # in SoftSolveContact's 2x2 case), normal impulses pushing only, each
+    # tangent one within its friction cone. Solved exactly by principal
+    # pivoting (SoftBlockPivot), the cones from the normal impulses found
+    # the time before. One row after the other takes about the mass ratio
+    # in passes to carry a heavy body's load through a light one (or to
+    # balance the couple that friction above and below puts on it); this
+    # takes one. The soft pass has normal rows only; the relax passes add
+    # the tangent rows. False, with nothing changed, beyond
+    # SOFT_BLOCK_ROWS rows or where no solution is found.
+    cdef SoftBlockRows rows
+    cdef cpFloat M[SOFT_BLOCK_ROWS][SOFT_BLOCK_ROWS]
+    cdef cpFloat q[SOFT_BLOCK_ROWS]
+    cdef cpFloat x[SOFT_BLOCK_ROWS]
+    cdef cpFloat x0[SOFT_BLOCK_ROWS]
+    cdef cpFloat lo[SOFT_BLOCK_ROWS]
+    cdef cpFloat hi[SOFT_BLOCK_ROWS]
+    cdef cpFloat soft[SOFT_BLOCK_ROWS]
+    cdef cpFloat bias, gamma, held, scale, cone
+    cdef int r, t, n, m, rounds, round
+    cdef bint settled
+    cdef const SoftContact *sc
+    cdef SoftPoint *sp
+    if not SoftBlockGather(ctx, root, 1 if useBias else 2, &rows):
+        return 0
+    n = rows.n
+    m = n if useBias else 2 * n
+    SoftBlockDelassus(ctx, &rows, m, M)
+    if useBias:
+        # Each row's softness acts on its effective mass within the block,
+        # 1 / (K^-1)_rr, the mass it moves while the other rows hold (under
+        # a heavy body on a light one on the ground, about the heavy
+        # body's), not on its own pair's (about the light body's: a spring
+        # that soft lets the heavy body sink the mass ratio times deeper).
+        if not SoftBlockEffectiveK(M, n, soft):
+            for r in range(n):
+                soft[r] = M[r][r]
+    else:
+        # A face contact's two tangent rows are the same row (cross(r, t) =
+        # r . n is the face's offset for both points): a relative 1e-9 on
+        # their diagonal makes the system regular and splits their impulse
+        # equally.
+        scale = 0.0
+        for r in range(n, m):
+            scale = fmax(scale, M[r][r])
+        for r in range(n, m):
+            M[r][r] += 1e-9 * scale
+    for r in range(n):
+        sc = rows.contact[r]
+        sp = &rows.contact[r].p[rows.point[r]]
+        SoftPointBias(ctx, sc, rows.point[r], &ctx.states[sc.ia], &ctx.states[sc.ib], useBias,
+                      soft[r] if useBias else -1.0, &bias, &gamma, &held)
+        x0[r] = sp.normalImpulse
+        soft[r] = soft[r] * gamma if useBias else 0.0
+        q[r] = SoftBlockSpeed(ctx, &rows, r) + bias - soft[r] * held
+        lo[r] = 0.0
+        hi[r] = INFINITY
+    for r in range(n, m):
+        sc = rows.contact[r - n]
+        sp = &rows.contact[r - n].p[rows.point[r - n]]
+        x0[r] = sp.tangentImpulse
+        q[r] = SoftBlockSpeed(ctx, &rows, r) + sc.surfaceT
+        cone = sc.friction * x0[r - n]
+        hi[r] = cone if cone > 0.0 else 0.0
+        lo[r] = -hi[r]
+    for r in range(m):
+        for t in range(m):
+            q[r] -= M[r][t] * x0[t]
+    for r in range(n):
+        # (After q, which takes K.)
+        M[r][r] += soft[r]
+    rounds = 1 if useBias else 3
+    for round in range(rounds):
+        if not SoftBlockPivot(M, q, lo, hi, m, x0, x):
+            return 0
+        settled = 1
+        for r in range(n, m):
+            cone = rows.contact[r - n].friction * x[r - n]
+            if cone != hi[r]:
+                settled = 0
+                hi[r] = cone
+                lo[r] = -cone
+        if settled:
+            break
+    for r in range(n, m):
+        # Within the cone of the normal impulse found last.
+        x[r] = fmin(hi[r], fmax(lo[r], x[r]))
+    for r in range(m):
+        sp = &rows.contact[r % n].p[rows.point[r % n]]
+        if r < n:
+            sp.normalImpulse = x[r]
+            if x[r] > sp.maxNormalImpulse:
+                sp.maxNormalImpulse = x[r]
+        else:
+            sp.tangentImpulse = x[r]
+        x[r] -= x0[r]
+    SoftBlockApply(ctx, &rows, m, x)
+    return 1
+
+cdef bint SoftBlockPivot(cpFloat M[][SOFT_BLOCK_ROWS], const cpFloat *q, const cpFloat *lo,
+                         const cpFloat *hi, int n, const cpFloat *x0, cpFloat *x) noexcept nogil:
+    # The bounded complementarity problem w = M x + q, lo <= x <= hi, each
+    # row either free (w = 0) or at a bound that w pushes it against (at lo
+    # with w >= 0, at hi with w <= 0), by principal pivoting: solve for the
+    # free rows with the others at their bounds, then move the first row
+    # that is wrong (Murty's least-index rule, which ends for a positive
+    # definite M) and solve again. Each row starts where x0 (the last
+    # pass's impulses) has it, so that a block at rest takes one solve.
+    # False where no solution is found.
+    cdef int state[SOFT_BLOCK_ROWS]       # 0 free, -1 at lo, 1 at hi
+    cdef int r, t, pivot, flip
+    cdef cpFloat w
+    for r in range(n):
+        state[r] = 0
+        if lo[r] == hi[r] or x0[r] <= lo[r]:
+            state[r] = -1
+        elif x0[r] >= hi[r]:
+            state[r] = 1
+    for pivot in range(4 * SOFT_BLOCK_ROWS):
+        if not SoftBlockSolveFree(M, q, lo, hi, state, n, x):
+            return 0
+        flip = -1
+        for r in range(n):
+            if state[r] == 0:
+                if x[r] < lo[r]:
+                    state[r] = -1
+                    flip = r
+                elif x[r] > hi[r]:
+                    state[r] = 1
+                    flip = r
+            elif lo[r] != hi[r]:
+                w = q[r]
+                for t in range(n):
+                    w += M[r][t] * x[t]
+                if (state[r] < 0 and w < 0.0) or (state[r] > 0 and w > 0.0):
+                    state[r] = 0
+                    flip = r
+            if flip >= 0:
+                break
+        if flip < 0:
+            return 1
+    return 0
+
+cdef bint SoftBlockEffectiveK(cpFloat M[][SOFT_BLOCK_ROWS], int n, cpFloat *keff) noexcept nogil:
+    # keff[r] = 1 / (K^-1)_rr of the symmetric K = M (Gauss-Jordan with
+    # partial pivoting; a dependent row, held by the others, gets a tiny
+    # one); false if K is singular beyond that.
+    cdef cpFloat a[SOFT_BLOCK_ROWS][2 * SOFT_BLOCK_ROWS]
+    cdef int r, t, col, best
+    cdef cpFloat f, big, scale = 0.0
+    for r in range(n):
+        scale = fmax(scale, M[r][r])
+    if not (scale > 0.0):
+        return 0
+    for r in range(n):
+        for t in range(n):
+            a[r][t] = M[r][t]
+            a[r][n + t] = 1.0 if r == t else 0.0
+        # (A relative 1e-9 on the diagonal keeps dependent rows solvable.)
+        a[r][r] += 1e-9 * scale
+    for col in range(n):
+        best = col
+        big = fabs(a[col][col])
+        for r in range(col + 1, n):
+            if fabs(a[r][col]) > big:
+                big = fabs(a[r][col])
+                best = r
+        if not (big > 1e-14 * scale):
+            return 0
+        if best != col:
+            for t in range(2 * n):
+                f = a[col][t]
+                a[col][t] = a[best][t]
+                a[best][t] = f
+        f = 1.0 / a[col][col]
+        for t in range(2 * n):
+            a[col][t] *= f
+        for r in range(n):
+            if r != col and a[r][col] != 0.0:
+                f = a[r][col]
+                for t in range(2 * n):
+                    a[r][t] -= f * a[col][t]
+    for r in range(n):
+        if not (a[r][n + r] > 0.0):
+            return 0
+        keff[r] = 1.0 / a[r][n + r]
+    return 1
+
+cdef bint SoftBlockSolveFree(cpFloat M[][SOFT_BLOCK_ROWS], const cpFloat *q, const cpFloat *lo,
+                             const cpFloat *hi, const int *state, int n,
+                             cpFloat *x) noexcept nogil:
+    # x of the free rows from their equations M x = -q, the others at their
+    # bounds (Gaussian elimination with partial pivoting); false if singular.
+    cdef cpFloat a[SOFT_BLOCK_ROWS][SOFT_BLOCK_ROWS + 1]
+    cdef int idx[SOFT_BLOCK_ROWS]
+    cdef int k = 0
+    cdef int r, t, col, best
+    cdef cpFloat f, big, scale = 0.0
+    for r in range(n):
+        if state[r] == 0:
+            idx[k] = r
+            k += 1
+            x[r] = 0.0
+        else:
+            x[r] = lo[r] if state[r] < 0 else hi[r]
+    for r in range(k):
+        a[r][k] = -q[idx[r]]
+        for t in range(n):
+            if state[t] != 0:
+                a[r][k] -= M[idx[r]][t] * x[t]
+        for t in range(k):
+            a[r][t] = M[idx[r]][idx[t]]
+        scale = fmax(scale, fabs(a[r][r]))
+    for col in range(k):
+        best = col
+        big = fabs(a[col][col])
+        for r in range(col + 1, k):
+            if fabs(a[r][col]) > big:
+                big = fabs(a[r][col])
+                best = r
+        if not (big > 1e-12 * scale):
+            return 0
+        if best != col:
+            for t in range(k + 1):
+                f = a[col][t]
+                a[col][t] = a[best][t]
+                a[best][t] = f
+        for r in range(col + 1, k):
+            f = a[r][col] / a[col][col]
+            for t in range(col, k + 1):
+                a[r][t] -= f * a[col][t]
+    for r in range(k - 1, -1, -1):
+        f = a[r][k]
+        for t in range(r + 1, k):
+            f -= a[r][t] * x[idx[t]]
+        x[idx[r]] = f / a[r][r]
+    return 1
+
+cdef void SoftEachBlockContact(SoftContext *ctx, int body, bint useBias,
+                               bint normals) noexcept nogil:
+    # SoftSolveContact over a light body's contacts.
+    cdef int c = ctx.blockHead[body]
+    while c >= 0:
+        SoftSolveContact(ctx, &ctx.contacts[c], useBias, normals)
+        c = ctx.blockNext[c]
 
 cdef inline bint SoftPointBias(SoftContext *ctx, const SoftContact *sc, int j,
                                const SoftState *sa, const SoftState *sb, bint useBias,
-                               cpFloat *bias, cpFloat *gamma, cpFloat *held) noexcept nogil:
+                               cpFloat rowK, cpFloat *bias, cpFloat *gamma,
+                               cpFloat *held) noexcept nogil:
     # Point j's bias, compliance and held impulse for this pass; whether it
-    # is apart (speculative).
+    # is apart (speculative). rowK: the row's k (inverse effective mass),
+    # below 0 for the contact's own (its 2x2 matrix's or its point's).
     cdef const SoftPoint *sp = &sc.p[j]
     cdef cpFloat nx = sc.nx
     cdef cpFloat ny = sc.ny
-    cdef cpFloat prAx, prAy, prBx, prBy, dx, dy, s, rowK, limit
+    cdef cpFloat prAx, prAy, prBx, prBy, dx, dy, s, limit
     # The current separation from the bodies' motion in this step.
     prAx = sa.qc * sp.rAx - sa.qs * sp.rAy
     prAy = sa.qs * sp.rAx + sa.qc * sp.rAy
@@ -1663,8 +2169,9 @@ cdef inline bint SoftPointBias(SoftContext *ctx, const SoftContact *sc, int j,
         gamma[0] = sp.compliance
         held[0] = fmin(sp.normalImpulse, sp.preload)
         bias[0] = sp.biasRate * s
-        rowK = (sc.k11 if j == 0 else sc.k22) if sc.block else (
-            1.0 / sp.normalMass if sp.normalMass > 0.0 else 0.0)
+        if rowK < 0.0:
+            rowK = (sc.k11 if j == 0 else sc.k22) if sc.block else (
+                1.0 / sp.normalMass if sp.normalMass > 0.0 else 0.0)
         limit = -ctx.pushOut - rowK * gamma[0] * (sp.normalImpulse - held[0])
         if bias[0] < limit:
             bias[0] = limit
@@ -1714,7 +2221,8 @@ cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias,
     ny = sc.ny
     if normals:
         for j in range(sc.count):
-            apart += SoftPointBias(ctx, sc, j, sa, sb, useBias, &bias[j], &gamma[j], &held[j])
+            apart += SoftPointBias(ctx, sc, j, sa, sb, useBias, -1.0, &bias[j], &gamma[j],
+                                   &held[j])
         if sc.block:
             # Both normal rows at once: the linear complementarity problem
             # w = A x + q, x >= 0, w >= 0, x.w = 0 for the accumulated
@@ -1868,9 +2376,7 @@ cdef void SoftRelax(SoftContext *ctx, bint last) noexcept nogil:
         return
     for i in range(SOFT_GRAPH_COLORS):
         SoftRun(ctx, SOFT_TASK_RELAX_ACCUMULATE, ctx.colorLanes[i], ctx.colorLanes[i + 1], 0)
-    for i in range(ctx.overflowCount):
-        sc = &ctx.contacts[ctx.overflow[i]]
-        SoftSolveContact(ctx, sc, 0, 1)
+    SoftSolveOverflow(ctx, 0)
     for i in range(ctx.overflowCount):
         sc = &ctx.contacts[ctx.overflow[i]]
         for j in range(sc.count):
