@@ -1229,24 +1229,23 @@ cdef bint SoftFindBlocks(SoftContext *ctx) noexcept nogil:
     # touch (what a light body rests on carries the heavy load too), up to
     # SOFT_BLOCK_SPREAD contacts away. Light bodies that touch are one
     # block; a block's contacts (all that touch its bodies) go to the
-    # overflow, and their normal rows are solved together (SoftSolveBlock).
-    # Only in a step with such a pair (ctx.ratioPairs).
+    # overflow, and their rows are solved together (SoftSolveBlock). Where
+    # a block would have more than SOFT_BLOCK_ROWS rows, the spread is cut
+    # back until all fit; with none left, a block still too large is not
+    # one. Only in a step with such a pair (ctx.ratioPairs).
     cdef int n = ctx.contactCount
     cdef int nb = ctx.bodyCount
-    cdef int *lists = <int *>_reserve(ctx.space, SOFT_SCRATCH_BLOCKS, 4 * nb + n, sizeof(int))
+    cdef int *lists = <int *>_reserve(ctx.space, SOFT_SCRATCH_BLOCKS, 5 * nb + n, sizeof(int))
     cdef int *light
-    cdef int *parent
     cdef SoftColorKey *key
-    cdef cpArbiter *arb
-    cdef int i, side, round, root, ra, rb
+    cdef int i, side, round, reach
     cdef bint grown
     if lists == NULL:
         return 0
     light = lists
-    parent = lists + nb
     ctx.blockHead = lists + 2 * nb
     ctx.blockBodies = lists + 3 * nb
-    ctx.blockNext = lists + 4 * nb
+    ctx.blockNext = lists + 5 * nb
     memset(light, 0, <size_t>nb * sizeof(int))
     for i in range(n):
         key = &ctx.colorKeys[i]
@@ -1258,6 +1257,7 @@ cdef bint SoftFindBlocks(SoftContext *ctx) noexcept nogil:
                 light[key.ib] = 1
     # Spread: in round r a body becomes light (light = r + 1) from one that
     # was light before the round (1 <= light <= r).
+    reach = 0
     for round in range(1, SOFT_BLOCK_SPREAD + 1):
         grown = 0
         for i in range(n):
@@ -1274,39 +1274,55 @@ cdef bint SoftFindBlocks(SoftContext *ctx) noexcept nogil:
                     grown = 1
         if not grown:
             break
+        reach = round
+    while not SoftGroupBlocks(ctx, light, lists + nb, lists + 4 * nb, reach, reach == 0):
+        reach -= 1
+    return 1
+
+cdef bint SoftGroupBlocks(SoftContext *ctx, const int *light, int *parent, int *rows, int reach,
+                          bint last) noexcept nogil:
+    # The blocks of the bodies light within `reach` rounds (SoftFindBlocks),
+    # their roots the lowest slots: false, with nothing set, if one has
+    # more than SOFT_BLOCK_ROWS rows (a normal and a tangent row per
+    # point), unless `last`, which leaves such a one out.
+    cdef int n = ctx.contactCount
+    cdef int nb = ctx.bodyCount
+    cdef int i, root, ra, rb
+    cdef SoftColorKey *key
+    cdef cpArbiter *arb
     for i in range(nb):
         parent[i] = i
+        rows[i] = 0
         ctx.blockHead[i] = -1
     for i in range(n):
         key = &ctx.colorKeys[i]
-        if key.a != 0 and key.b != 0 and light[key.ia] and light[key.ib]:
+        if key.a != 0 and key.b != 0 and SoftInBlock(light, key.ia, reach) and SoftInBlock(light, key.ib, reach):
             ra = SoftBlockRoot(parent, key.ia)
             rb = SoftBlockRoot(parent, key.ib)
             if ra != rb:
-                # (The lower slot is the root: the same blocks whatever the order.)
                 parent[rb if ra < rb else ra] = ra if ra < rb else rb
-    # Each contact's block (its light body's root), and each block's rows
-    # in the relax passes (light[] reused: at the roots): a block with more
-    # than SOFT_BLOCK_ROWS is not one, its contacts are solved as any.
+    # Each contact's block (ctx.blockNext for now), and each block's rows.
     for i in range(n):
         key = &ctx.colorKeys[i]
         root = -1
-        if key.ia != 0 and light[key.ia]:
+        if SoftInBlock(light, key.ia, reach):
             root = SoftBlockRoot(parent, key.ia)
-        elif key.ib != 0 and light[key.ib]:
+        elif SoftInBlock(light, key.ib, reach):
             root = SoftBlockRoot(parent, key.ib)
         ctx.blockNext[i] = root
-    memset(light, 0, <size_t>nb * sizeof(int))
-    for i in range(n):
-        if ctx.blockNext[i] >= 0:
+        if root >= 0:
             arb = <cpArbiter *>ctx.space.arbiters.arr[ctx.contactSource[i]]
-            light[ctx.blockNext[i]] += 2 * (arb.count if arb.count <= 2 else 2)
+            rows[root] += 2 * (arb.count if arb.count <= 2 else 2)
+    if not last:
+        for i in range(nb):
+            if rows[i] > SOFT_BLOCK_ROWS:
+                return 0
     # Each block's contacts, in arbiter order; the blocks in their roots' order.
     for i in range(n - 1, -1, -1):
         key = &ctx.colorKeys[i]
         root = ctx.blockNext[i]
         ctx.blockNext[i] = -1
-        if root >= 0 and light[root] <= SOFT_BLOCK_ROWS:
+        if root >= 0 and rows[root] <= SOFT_BLOCK_ROWS:
             ctx.blockNext[i] = ctx.blockHead[root]
             ctx.blockHead[root] = i
             key.kind = -1
@@ -1317,6 +1333,9 @@ cdef bint SoftFindBlocks(SoftContext *ctx) noexcept nogil:
             ctx.blockBodies[ctx.blockBodyCount] = i
             ctx.blockBodyCount += 1
     return 1
+
+cdef inline bint SoftInBlock(const int *light, int slot, int reach) noexcept nogil:
+    return slot != 0 and 1 <= light[slot] <= reach + 1
 
 cdef inline int SoftNotedIndex(int guess, cpBody *body, SoftContext *ctx) noexcept nogil:
     # SoftIndex, from the slot the narrow phase noted where it is right (the
@@ -1967,13 +1986,15 @@ cdef bint SoftSolveBlock(SoftContext *ctx, int root, bint useBias) noexcept nogi
     for round in range(rounds):
         if not SoftBlockPivot(M, q, lo, hi, m, x0, x):
             return 0
+        # Again only where a tangent impulse the cone held is beyond the
+        # new one (sticking became sliding); one at the cone follows it.
         settled = 1
         for r in range(n, m):
             cone = rows.contact[r - n].friction * x[r - n]
-            if cone != hi[r]:
+            if fabs(x[r]) > cone and fabs(x[r]) < hi[r]:
                 settled = 0
-                hi[r] = cone
-                lo[r] = -cone
+            hi[r] = cone
+            lo[r] = -cone
         if settled:
             break
     for r in range(n, m):
@@ -1999,7 +2020,9 @@ cdef bint SoftBlockPivot(cpFloat M[][SOFT_BLOCK_ROWS], const cpFloat *q, const c
     # free rows with the others at their bounds, then move the first row
     # that is wrong (Murty's least-index rule, which ends for a positive
     # definite M) and solve again. Each row starts where x0 (the last
-    # pass's impulses) has it, so that a block at rest takes one solve.
+    # pass's impulses) has it, so that a block at rest takes few solves.
+    # (Moving every wrong row at once took more solves on the pyramids of
+    # benchmarks' high mass ratio scene.)
     # False where no solution is found.
     cdef int state[SOFT_BLOCK_ROWS]       # 0 free, -1 at lo, 1 at hi
     cdef int r, t, pivot, flip
