@@ -103,6 +103,10 @@ cdef enum:
 # heavy load), up to this many contacts from a heavy body.
 cdef enum:
     SOFT_BLOCK_SPREAD = 4
+# Solves a block's pivoting may take before it gives up (SoftBlockPivot):
+# the pass then solves that block's contacts one by one.
+cdef enum:
+    SOFT_BLOCK_PIVOTS = 64
 cdef const cpFloat SOFT_MAX_LOAD_DEFLECTION = 0.005
 cdef const cpFloat SOFT_RATIO_STIFFENING = 5.0
 # The load moves this fraction of the way to the last step's load per step

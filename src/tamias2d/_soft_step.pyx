@@ -147,9 +147,10 @@ cdef enum:
     SOFT_SCRATCH_DESTINATIONS # where each pair's contacts go in the contact buffers (SoftCollide)
     SOFT_SCRATCH_PAIR_ARBITERS  # each updated pair's arbiter, packed (SoftCollide)
     SOFT_SCRATCH_BLOCKS       # the light bodies and their contacts (SoftFindBlocks)
+    SOFT_SCRATCH_BLOCK_CACHE  # each block's matrix and factors for the step (SoftBlockCache)
     SOFT_SCRATCH_COUNT
 
-# (cpSoftScratch holds 20 buffers.)
+# (cpSoftScratch holds 24 buffers.)
 
 cdef void *_reserve(cpSpace *space, int which, int need, size_t size) noexcept nogil:
     # Room for `need` elements of `size` bytes in scratch buffer `which`, or
@@ -215,6 +216,21 @@ cdef struct SoftColorKey:
     int block                 # it touches a light body solved as a block (SoftFindBlocks)
     cpFloat size              # SoftContactSize
 
+# A block's matrix for the step (its rows' arms and masses are the step's)
+# and the last Cholesky factor of each kind of pass with the free rows it
+# was made for: a block at rest keeps its free rows from pass to pass, and
+# each pass after the first of its kind then costs a substitution.
+cdef struct SoftBlockCache:
+    bint built
+    cpFloat K[SOFT_BLOCK_ROWS][SOFT_BLOCK_ROWS]   # J W J', regularized, all rows
+    cpFloat keff[SOFT_BLOCK_ROWS]                 # the normal rows' effective k
+    int factorCount[2]                            # soft pass, relax pass; -1: none
+    int factorRows[2][SOFT_BLOCK_ROWS]
+    bint stateKept[2]                             # the last pass's row states (SoftBlockPivot)
+    int state[2][SOFT_BLOCK_ROWS]
+    cpFloat factorExtra[2][SOFT_BLOCK_ROWS]       # the diagonal added to K in it
+    cpFloat L[2][SOFT_BLOCK_ROWS][SOFT_BLOCK_ROWS]
+
 cdef struct SoftContext:
     cpSpace *space
     SoftBody *bodies
@@ -253,6 +269,7 @@ cdef struct SoftContext:
     int blockBodyCount
     int *blockHead            # per root body slot: its block's first contact, -1: none
     int *blockNext            # per contact: the next one of its block
+    SoftBlockCache *blockCache    # per block (blockBodies' order), built by its first pass
     int threadedCount         # last step's arbiters left threaded (-1: unthreaded as Munk2D)
     bint threaded             # stages may run on the pool (SoftRun)
     bint serialVelocities     # a body has its own velocity_func (Python: one thread)
@@ -1229,10 +1246,12 @@ cdef bint SoftFindBlocks(SoftContext *ctx) noexcept nogil:
     # touch (what a light body rests on carries the heavy load too), up to
     # SOFT_BLOCK_SPREAD contacts away. Light bodies that touch are one
     # block; a block's contacts (all that touch its bodies) go to the
-    # overflow, and their rows are solved together (SoftSolveBlock). Where
-    # a block would have more than SOFT_BLOCK_ROWS rows, the spread is cut
-    # back until all fit; with none left, a block still too large is not
-    # one. Only in a step with such a pair (ctx.ratioPairs).
+    # overflow, and their rows are solved together (SoftSolveBlock). A
+    # block with more than SOFT_BLOCK_ROWS rows is not one: its contacts are
+    # solved one by one as any. (Cutting such a block back to the bodies
+    # nearest the heavy one carried its load exactly to bodies solved one
+    # by one, which it then crushed, faster than with no block at all.)
+    # Only in a step with such a pair (ctx.ratioPairs).
     cdef int n = ctx.contactCount
     cdef int nb = ctx.bodyCount
     cdef int *lists = <int *>_reserve(ctx.space, SOFT_SCRATCH_BLOCKS, 5 * nb + n, sizeof(int))
@@ -1251,10 +1270,8 @@ cdef bint SoftFindBlocks(SoftContext *ctx) noexcept nogil:
         key = &ctx.colorKeys[i]
         if key.a != 0 and key.b != 0:
             side = SoftLighterSide(&ctx.bodies[key.ia], &ctx.bodies[key.ib])
-            if side == 1:
-                light[key.ia] = 1
-            elif side == 2:
-                light[key.ib] = 1
+            if side != 0:
+                light[key.ia if side == 1 else key.ib] = 1
     # Spread: in round r a body becomes light (light = r + 1) from one that
     # was light before the round (1 <= light <= r).
     reach = 0
@@ -1275,16 +1292,14 @@ cdef bint SoftFindBlocks(SoftContext *ctx) noexcept nogil:
         if not grown:
             break
         reach = round
-    while not SoftGroupBlocks(ctx, light, lists + nb, lists + 4 * nb, reach, reach == 0):
-        reach -= 1
+    SoftGroupBlocks(ctx, light, lists + nb, lists + 4 * nb, reach)
     return 1
 
-cdef bint SoftGroupBlocks(SoftContext *ctx, const int *light, int *parent, int *rows, int reach,
-                          bint last) noexcept nogil:
+cdef void SoftGroupBlocks(SoftContext *ctx, const int *light, int *parent, int *rows,
+                          int reach) noexcept nogil:
     # The blocks of the bodies light within `reach` rounds (SoftFindBlocks),
-    # their roots the lowest slots: false, with nothing set, if one has
-    # more than SOFT_BLOCK_ROWS rows (a normal and a tangent row per
-    # point), unless `last`, which leaves such a one out.
+    # their roots the lowest slots; one with more than SOFT_BLOCK_ROWS rows
+    # (a normal and a tangent row per point) is left out.
     cdef int n = ctx.contactCount
     cdef int nb = ctx.bodyCount
     cdef int i, root, ra, rb
@@ -1313,10 +1328,6 @@ cdef bint SoftGroupBlocks(SoftContext *ctx, const int *light, int *parent, int *
         if root >= 0:
             arb = <cpArbiter *>ctx.space.arbiters.arr[ctx.contactSource[i]]
             rows[root] += 2 * (arb.count if arb.count <= 2 else 2)
-    if not last:
-        for i in range(nb):
-            if rows[i] > SOFT_BLOCK_ROWS:
-                return 0
     # Each block's contacts, in arbiter order; the blocks in their roots' order.
     for i in range(n - 1, -1, -1):
         key = &ctx.colorKeys[i]
@@ -1332,7 +1343,18 @@ cdef bint SoftGroupBlocks(SoftContext *ctx, const int *light, int *parent, int *
         if ctx.blockHead[i] >= 0:
             ctx.blockBodies[ctx.blockBodyCount] = i
             ctx.blockBodyCount += 1
-    return 1
+    ctx.blockCache = NULL
+    if ctx.blockBodyCount > 0:
+        ctx.blockCache = <SoftBlockCache *>_reserve(ctx.space, SOFT_SCRATCH_BLOCK_CACHE,
+                                                    ctx.blockBodyCount, sizeof(SoftBlockCache))
+        if ctx.blockCache == NULL:
+            # (Out of memory: no blocks, the contacts one by one.)
+            for i in range(n):
+                ctx.colorKeys[i].block = 0
+            ctx.blockBodyCount = 0
+            return
+        for i in range(ctx.blockBodyCount):
+            ctx.blockCache[i].built = 0
 
 cdef inline bint SoftInBlock(const int *light, int slot, int reach) noexcept nogil:
     return slot != 0 and 1 <= light[slot] <= reach + 1
@@ -1788,7 +1810,7 @@ cdef void SoftSolveOverflow(SoftContext *ctx, bint useBias) noexcept nogil:
         if not sc.inBlock:
             SoftSolveContact(ctx, sc, useBias, 1)
     for i in range(ctx.blockBodyCount):
-        if not SoftSolveBlock(ctx, ctx.blockBodies[i], useBias):
+        if not SoftSolveBlock(ctx, i, useBias):
             # Too many rows, or no solution found: one by one.
             SoftEachBlockContact(ctx, ctx.blockBodies[i], useBias, 1)
 
@@ -1907,7 +1929,7 @@ cdef void SoftBlockApply(SoftContext *ctx, const SoftBlockRows *rows, int m,
             st.vy += bd.m_inv * d[r] * dy
             st.w += bd.i_inv * d[r] * armB
 
-cdef bint SoftSolveBlock(SoftContext *ctx, int root, bint useBias) noexcept nogil:
+cdef bint SoftSolveBlock(SoftContext *ctx, int block, bint useBias) noexcept nogil:
     # All of a block's contact rows at once: the linear complementarity
     # problem w = M x + q over their accumulated impulses x, with
     # M = K + diag(k_r gamma_r), K = J W J', q = v + bias - K x0
@@ -1919,53 +1941,63 @@ cdef bint SoftSolveBlock(SoftContext *ctx, int root, bint useBias) noexcept nogi
     # in passes to carry a heavy body's load through a light one (or to
     # balance the couple that friction above and below puts on it); this
     # takes one. The soft pass has normal rows only; the relax passes add
-    # the tangent rows. False, with nothing changed, beyond
-    # SOFT_BLOCK_ROWS rows or where no solution is found.
+    # the tangent rows. K (and each normal row's effective k) is made by
+    # the step's first pass of the block (SoftBlockCache). False, with
+    # nothing changed, beyond SOFT_BLOCK_ROWS rows or where no solution is
+    # found.
+    cdef SoftBlockCache *cache = &ctx.blockCache[block]
     cdef SoftBlockRows rows
-    cdef cpFloat M[SOFT_BLOCK_ROWS][SOFT_BLOCK_ROWS]
     cdef cpFloat q[SOFT_BLOCK_ROWS]
     cdef cpFloat x[SOFT_BLOCK_ROWS]
     cdef cpFloat x0[SOFT_BLOCK_ROWS]
     cdef cpFloat lo[SOFT_BLOCK_ROWS]
     cdef cpFloat hi[SOFT_BLOCK_ROWS]
-    cdef cpFloat soft[SOFT_BLOCK_ROWS]
+    cdef cpFloat extra[SOFT_BLOCK_ROWS]   # added to K's diagonal in this pass
     cdef cpFloat bias, gamma, held, scale, cone
     cdef int r, t, n, m, rounds, round
     cdef bint settled
     cdef const SoftContact *sc
     cdef SoftPoint *sp
-    if not SoftBlockGather(ctx, root, 1 if useBias else 2, &rows):
+    if not SoftBlockGather(ctx, ctx.blockBodies[block], 2, &rows):
         return 0
     n = rows.n
     m = n if useBias else 2 * n
-    SoftBlockDelassus(ctx, &rows, m, M)
-    if useBias:
-        # Each row's softness acts on its effective mass within the block,
-        # 1 / (K^-1)_rr, the mass it moves while the other rows hold (under
-        # a heavy body on a light one on the ground, about the heavy
+    if not cache.built:
+        SoftBlockDelassus(ctx, &rows, 2 * n, cache.K)
+        # Rows can depend on each other: a face contact's two tangent rows
+        # are the same row (cross(r, t) = r . n is the face's offset for
+        # both points), and a light body wedged among others has more
+        # normal rows than it can move in, or two nearly coincident points.
+        # A relative 1e-9 on the diagonal (on the change of impulse: M
+        # multiplies x - x0) makes the system regular and shares such rows'
+        # impulse instead of letting round-off split it into huge opposite
+        # parts.
+        scale = 0.0
+        for r in range(2 * n):
+            scale = fmax(scale, cache.K[r][r])
+        for r in range(2 * n):
+            cache.K[r][r] += 1e-9 * scale
+        # Each normal row's softness acts on its effective mass within the
+        # block, 1 / (K^-1)_rr, the mass it moves while the other rows hold
+        # (under a heavy body on a light one on the ground, about the heavy
         # body's), not on its own pair's (about the light body's: a spring
         # that soft lets the heavy body sink the mass ratio times deeper).
-        if not SoftBlockEffectiveK(M, n, soft):
+        if not SoftBlockEffectiveK(cache.K, n, cache.keff):
             for r in range(n):
-                soft[r] = M[r][r]
-    else:
-        # A face contact's two tangent rows are the same row (cross(r, t) =
-        # r . n is the face's offset for both points): a relative 1e-9 on
-        # their diagonal makes the system regular and splits their impulse
-        # equally.
-        scale = 0.0
-        for r in range(n, m):
-            scale = fmax(scale, M[r][r])
-        for r in range(n, m):
-            M[r][r] += 1e-9 * scale
+                cache.keff[r] = cache.K[r][r]
+        cache.factorCount[0] = -1
+        cache.factorCount[1] = -1
+        cache.stateKept[0] = 0
+        cache.stateKept[1] = 0
+        cache.built = 1
     for r in range(n):
         sc = rows.contact[r]
         sp = &rows.contact[r].p[rows.point[r]]
         SoftPointBias(ctx, sc, rows.point[r], &ctx.states[sc.ia], &ctx.states[sc.ib], useBias,
-                      soft[r] if useBias else -1.0, &bias, &gamma, &held)
+                      cache.keff[r] if useBias else -1.0, &bias, &gamma, &held)
         x0[r] = sp.normalImpulse
-        soft[r] = soft[r] * gamma if useBias else 0.0
-        q[r] = SoftBlockSpeed(ctx, &rows, r) + bias - soft[r] * held
+        extra[r] = cache.keff[r] * gamma if useBias else 0.0
+        q[r] = SoftBlockSpeed(ctx, &rows, r) + bias - extra[r] * held
         lo[r] = 0.0
         hi[r] = INFINITY
     for r in range(n, m):
@@ -1976,15 +2008,13 @@ cdef bint SoftSolveBlock(SoftContext *ctx, int root, bint useBias) noexcept nogi
         cone = sc.friction * x0[r - n]
         hi[r] = cone if cone > 0.0 else 0.0
         lo[r] = -hi[r]
+        extra[r] = 0.0
     for r in range(m):
         for t in range(m):
-            q[r] -= M[r][t] * x0[t]
-    for r in range(n):
-        # (After q, which takes K.)
-        M[r][r] += soft[r]
+            q[r] -= cache.K[r][t] * x0[t]
     rounds = 1 if useBias else 3
     for round in range(rounds):
-        if not SoftBlockPivot(M, q, lo, hi, m, x0, x):
+        if not SoftBlockPivot(cache, 0 if useBias else 1, extra, q, lo, hi, m, x0, x):
             return 0
         # Again only where a tangent impulse the cone held is beyond the
         # new one (sticking became sliding); one at the cone follows it.
@@ -2012,29 +2042,33 @@ cdef bint SoftSolveBlock(SoftContext *ctx, int root, bint useBias) noexcept nogi
     SoftBlockApply(ctx, &rows, m, x)
     return 1
 
-cdef bint SoftBlockPivot(cpFloat M[][SOFT_BLOCK_ROWS], const cpFloat *q, const cpFloat *lo,
-                         const cpFloat *hi, int n, const cpFloat *x0, cpFloat *x) noexcept nogil:
-    # The bounded complementarity problem w = M x + q, lo <= x <= hi, each
+cdef bint SoftBlockPivot(SoftBlockCache *cache, int kind, const cpFloat *extra,
+                         const cpFloat *q, const cpFloat *lo, const cpFloat *hi, int n,
+                         const cpFloat *x0, cpFloat *x) noexcept nogil:
+    # The bounded complementarity problem w = M x + q, M = K + diag(extra)
+    # (the cache's K over the first n rows), lo <= x <= hi, each
     # row either free (w = 0) or at a bound that w pushes it against (at lo
     # with w >= 0, at hi with w <= 0), by principal pivoting: solve for the
     # free rows with the others at their bounds, then move the first row
     # that is wrong (Murty's least-index rule, which ends for a positive
-    # definite M) and solve again. Each row starts where x0 (the last
-    # pass's impulses) has it, so that a block at rest takes few solves.
+    # definite M) and solve again. Each row starts where the last pass of
+    # this kind left it (in the step's first, where x0, the last impulses,
+    # has it), so that a block at rest takes one solve, over the free rows
+    # it factored before (SoftBlockSolveFree).
     # (Moving every wrong row at once took more solves on the pyramids of
-    # benchmarks' high mass ratio scene.)
-    # False where no solution is found.
-    cdef int state[SOFT_BLOCK_ROWS]       # 0 free, -1 at lo, 1 at hi
+    # benchmarks' high mass ratio scene.) False where no solution is found
+    # within SOFT_BLOCK_PIVOTS solves.
+    cdef int *state = cache.state[kind]   # 0 free, -1 at lo, 1 at hi
     cdef int r, t, pivot, flip
     cdef cpFloat w
     for r in range(n):
-        state[r] = 0
-        if lo[r] == hi[r] or x0[r] <= lo[r]:
+        if lo[r] == hi[r]:
             state[r] = -1
-        elif x0[r] >= hi[r]:
-            state[r] = 1
-    for pivot in range(4 * SOFT_BLOCK_ROWS):
-        if not SoftBlockSolveFree(M, q, lo, hi, state, n, x):
+        elif not cache.stateKept[kind]:
+            state[r] = -1 if x0[r] <= lo[r] else (1 if x0[r] >= hi[r] else 0)
+    cache.stateKept[kind] = 0
+    for pivot in range(SOFT_BLOCK_PIVOTS):
+        if not SoftBlockSolveFree(cache, kind, extra, q, lo, hi, state, n, x):
             return 0
         flip = -1
         for r in range(n):
@@ -2046,15 +2080,16 @@ cdef bint SoftBlockPivot(cpFloat M[][SOFT_BLOCK_ROWS], const cpFloat *q, const c
                     state[r] = 1
                     flip = r
             elif lo[r] != hi[r]:
-                w = q[r]
+                w = q[r] + extra[r] * x[r]
                 for t in range(n):
-                    w += M[r][t] * x[t]
+                    w += cache.K[r][t] * x[t]
                 if (state[r] < 0 and w < 0.0) or (state[r] > 0 and w > 0.0):
                     state[r] = 0
                     flip = r
             if flip >= 0:
                 break
         if flip < 0:
+            cache.stateKept[kind] = 1
             return 1
     return 0
 
@@ -2103,16 +2138,21 @@ cdef bint SoftBlockEffectiveK(cpFloat M[][SOFT_BLOCK_ROWS], int n, cpFloat *keff
         keff[r] = 1.0 / a[r][n + r]
     return 1
 
-cdef bint SoftBlockSolveFree(cpFloat M[][SOFT_BLOCK_ROWS], const cpFloat *q, const cpFloat *lo,
-                             const cpFloat *hi, const int *state, int n,
-                             cpFloat *x) noexcept nogil:
+cdef bint SoftBlockSolveFree(SoftBlockCache *cache, int kind, const cpFloat *extra,
+                             const cpFloat *q, const cpFloat *lo, const cpFloat *hi,
+                             const int *state, int n, cpFloat *x) noexcept nogil:
     # x of the free rows from their equations M x = -q, the others at their
-    # bounds (Gaussian elimination with partial pivoting); false if singular.
-    cdef cpFloat a[SOFT_BLOCK_ROWS][SOFT_BLOCK_ROWS + 1]
+    # bounds. M is symmetric and (regularized) positive definite: Cholesky,
+    # L L' = M over the free rows, kept in the cache for the next solve of
+    # this kind over the same free rows; false where a pivot is not
+    # positive.
+    cdef cpFloat b[SOFT_BLOCK_ROWS]
     cdef int idx[SOFT_BLOCK_ROWS]
     cdef int k = 0
-    cdef int r, t, col, best
-    cdef cpFloat f, big, scale = 0.0
+    cdef int r, t, u
+    cdef bint same
+    cdef cpFloat f
+    cdef cpFloat *L = &cache.L[kind][0][0]     # row r from L[r * SOFT_BLOCK_ROWS]
     for r in range(n):
         if state[r] == 0:
             idx[k] = r
@@ -2121,36 +2161,47 @@ cdef bint SoftBlockSolveFree(cpFloat M[][SOFT_BLOCK_ROWS], const cpFloat *q, con
         else:
             x[r] = lo[r] if state[r] < 0 else hi[r]
     for r in range(k):
-        a[r][k] = -q[idx[r]]
+        f = -q[idx[r]]
         for t in range(n):
             if state[t] != 0:
-                a[r][k] -= M[idx[r]][t] * x[t]
-        for t in range(k):
-            a[r][t] = M[idx[r]][idx[t]]
-        scale = fmax(scale, fabs(a[r][r]))
-    for col in range(k):
-        best = col
-        big = fabs(a[col][col])
-        for r in range(col + 1, k):
-            if fabs(a[r][col]) > big:
-                big = fabs(a[r][col])
-                best = r
-        if not (big > 1e-12 * scale):
-            return 0
-        if best != col:
-            for t in range(k + 1):
-                f = a[col][t]
-                a[col][t] = a[best][t]
-                a[best][t] = f
-        for r in range(col + 1, k):
-            f = a[r][col] / a[col][col]
-            for t in range(col, k + 1):
-                a[r][t] -= f * a[col][t]
+                f -= cache.K[idx[r]][t] * x[t]
+        b[r] = f
+    same = cache.factorCount[kind] == k
+    r = 0
+    while same and r < k:
+        same = cache.factorRows[kind][r] == idx[r] and cache.factorExtra[kind][r] == extra[idx[r]]
+        r += 1
+    if not same:
+        cache.factorCount[kind] = -1
+        for r in range(k):
+            for t in range(r + 1):
+                f = cache.K[idx[r]][idx[t]]
+                if r == t:
+                    f += extra[idx[r]]
+                for u in range(t):
+                    f -= L[r * SOFT_BLOCK_ROWS + u] * L[t * SOFT_BLOCK_ROWS + u]
+                if r == t:
+                    if not (f > 0.0):
+                        return 0
+                    L[r * SOFT_BLOCK_ROWS + r] = sqrt(f)
+                else:
+                    L[r * SOFT_BLOCK_ROWS + t] = f / L[t * SOFT_BLOCK_ROWS + t]
+            cache.factorRows[kind][r] = idx[r]
+            cache.factorExtra[kind][r] = extra[idx[r]]
+        cache.factorCount[kind] = k
+    # L y = b, then L' x = y.
+    for r in range(k):
+        f = b[r]
+        for u in range(r):
+            f -= L[r * SOFT_BLOCK_ROWS + u] * b[u]
+        b[r] = f / L[r * SOFT_BLOCK_ROWS + r]
     for r in range(k - 1, -1, -1):
-        f = a[r][k]
-        for t in range(r + 1, k):
-            f -= a[r][t] * x[idx[t]]
-        x[idx[r]] = f / a[r][r]
+        f = b[r]
+        for u in range(r + 1, k):
+            f -= L[u * SOFT_BLOCK_ROWS + r] * b[u]
+        b[r] = f / L[r * SOFT_BLOCK_ROWS + r]
+    for r in range(k):
+        x[idx[r]] = b[r]
     return 1
 
 cdef void SoftEachBlockContact(SoftContext *ctx, int body, bint useBias,

@@ -392,8 +392,8 @@ cdef struct cpSoftSettings:
 # Per-step scratch of the soft solver, owned by the space (grown, never
 # shrunk; freed by cpSpaceDestroy; never copied).
 cdef struct cpSoftScratch:
-    void *buf[20]                # indexed by _soft_step's SOFT_SCRATCH_* (< 20)
-    int cap[20]                  # elements each buffer has room for
+    void *buf[24]                # indexed by _soft_step's SOFT_SCRATCH_* (< 24)
+    int cap[24]                  # elements each buffer has room for
     # The broad phase's last walk, kept in the SOFT_SCRATCH_PAIRS buffer: its
     # pair count and the dynamic tree's version after it (0: no walk kept).
     int pairCount
