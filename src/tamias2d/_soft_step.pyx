@@ -407,6 +407,7 @@ cdef volatile long _kept_walks = 0
 cdef volatile long _overflow_total = 0
 # The same for the bodies' arbiter lists (SoftResetArbiters).
 cdef bint _keep_threads = 1
+cdef bint _use_blocks = 1
 cdef volatile long _kept_threads = 0
 
 cdef inline bint SoftGuessHolds(const cpArbiter *arb, const cpCollisionInfo *info) noexcept nogil:
@@ -1201,7 +1202,7 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     else:
         n = arbiters.num
     ctx.contactCount = n
-    if tamias_load(&ctx.ratioPairs):
+    if tamias_load(&ctx.ratioPairs) and _use_blocks:
         return SoftFindBlocks(ctx)
     return 1
 
@@ -3141,6 +3142,15 @@ def _keep_arbiter_threads(on=None):
     if on is not None:
         _keep_threads = bool(on)
     return bool(_keep_threads)
+
+def _mass_ratio_blocks(on=None):
+    """Whether light bodies' contacts are solved as blocks (SoftFindBlocks;
+    and, given `on`, set it first; for benchmarks/mass_ratios.py, which
+    measures the scenes with and without them in one process)."""
+    global _use_blocks
+    if on is not None:
+        _use_blocks = bool(on)
+    return bool(_use_blocks)
 
 def _kept_threads_count():
     """Steps so far (all spaces) whose arbiters were left threaded."""
