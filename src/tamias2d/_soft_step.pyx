@@ -2143,67 +2143,104 @@ cdef bint SoftBlockSolveFree(SoftBlockCache *cache, int kind, const cpFloat *ext
                              const cpFloat *q, const cpFloat *lo, const cpFloat *hi,
                              const int *state, int n, cpFloat *x) noexcept nogil:
     # x of the free rows from their equations M x = -q, the others at their
-    # bounds. M is symmetric and (regularized) positive definite: Cholesky,
-    # L L' = M over the free rows, kept in the cache for the next solve of
-    # this kind over the same free rows; false where a pivot is not
+    # bounds. M is symmetric and (regularized) positive definite: its
+    # Cholesky factor over the free rows, L L' = M, is kept in the cache
+    # for the step's next solve of this kind, and brought to this solve's
+    # free rows by dropping and appending rows (each O(k^2): a pivot that
+    # moves one row does not factor again); false where a pivot is not
     # positive.
     cdef cpFloat b[SOFT_BLOCK_ROWS]
-    cdef int idx[SOFT_BLOCK_ROWS]
-    cdef int k = 0
-    cdef int r, t, u
-    cdef bint same
-    cdef cpFloat f
+    cdef bint inFactor[SOFT_BLOCK_ROWS]
+    cdef int *rows = cache.factorRows[kind]   # the factor's rows, in its order
     cdef cpFloat *L = &cache.L[kind][0][0]     # row r from L[r * SOFT_BLOCK_ROWS]
+    cdef int k, r, t, u, p
+    cdef cpFloat f
     for r in range(n):
-        if state[r] == 0:
-            idx[k] = r
+        x[r] = 0.0 if state[r] == 0 else (lo[r] if state[r] < 0 else hi[r])
+        inFactor[r] = 0
+    k = cache.factorCount[kind]
+    cache.factorCount[kind] = -1      # (until it is whole again)
+    if k < 0:
+        k = 0
+    p = k - 1
+    while p >= 0:
+        r = rows[p]
+        if state[r] != 0 or cache.factorExtra[kind][p] != extra[r]:
+            SoftCholeskyDrop(L, k, p)
+            for t in range(p, k - 1):
+                rows[t] = rows[t + 1]
+                cache.factorExtra[kind][t] = cache.factorExtra[kind][t + 1]
+            k -= 1
+        p -= 1
+    for t in range(k):
+        inFactor[rows[t]] = 1
+    for r in range(n):
+        if state[r] == 0 and not inFactor[r]:
+            if not SoftCholeskyAppend(L, cache.K, extra, rows, k, r):
+                return 0
+            cache.factorExtra[kind][k] = extra[r]
             k += 1
-            x[r] = 0.0
-        else:
-            x[r] = lo[r] if state[r] < 0 else hi[r]
-    for r in range(k):
-        f = -q[idx[r]]
-        for t in range(n):
-            if state[t] != 0:
-                f -= cache.K[idx[r]][t] * x[t]
-        b[r] = f
-    same = cache.factorCount[kind] == k
-    r = 0
-    while same and r < k:
-        same = cache.factorRows[kind][r] == idx[r] and cache.factorExtra[kind][r] == extra[idx[r]]
-        r += 1
-    if not same:
-        cache.factorCount[kind] = -1
-        for r in range(k):
-            for t in range(r + 1):
-                f = cache.K[idx[r]][idx[t]]
-                if r == t:
-                    f += extra[idx[r]]
-                for u in range(t):
-                    f -= L[r * SOFT_BLOCK_ROWS + u] * L[t * SOFT_BLOCK_ROWS + u]
-                if r == t:
-                    if not (f > 0.0):
-                        return 0
-                    L[r * SOFT_BLOCK_ROWS + r] = sqrt(f)
-                else:
-                    L[r * SOFT_BLOCK_ROWS + t] = f / L[t * SOFT_BLOCK_ROWS + t]
-            cache.factorRows[kind][r] = idx[r]
-            cache.factorExtra[kind][r] = extra[idx[r]]
-        cache.factorCount[kind] = k
-    # L y = b, then L' x = y.
-    for r in range(k):
-        f = b[r]
-        for u in range(r):
-            f -= L[r * SOFT_BLOCK_ROWS + u] * b[u]
-        b[r] = f / L[r * SOFT_BLOCK_ROWS + r]
-    for r in range(k - 1, -1, -1):
-        f = b[r]
-        for u in range(r + 1, k):
-            f -= L[u * SOFT_BLOCK_ROWS + r] * b[u]
-        b[r] = f / L[r * SOFT_BLOCK_ROWS + r]
-    for r in range(k):
-        x[idx[r]] = b[r]
+    cache.factorCount[kind] = k
+    # L y = b, then L' z = y, over the factor's rows.
+    for t in range(k):
+        f = -q[rows[t]]
+        for u in range(n):
+            if state[u] != 0:
+                f -= cache.K[rows[t]][u] * x[u]
+        for u in range(t):
+            f -= L[t * SOFT_BLOCK_ROWS + u] * b[u]
+        b[t] = f / L[t * SOFT_BLOCK_ROWS + t]
+    for t in range(k - 1, -1, -1):
+        f = b[t]
+        for u in range(t + 1, k):
+            f -= L[u * SOFT_BLOCK_ROWS + t] * b[u]
+        b[t] = f / L[t * SOFT_BLOCK_ROWS + t]
+    for t in range(k):
+        x[rows[t]] = b[t]
     return 1
+
+cdef bint SoftCholeskyAppend(cpFloat *L, cpFloat K[][SOFT_BLOCK_ROWS], const cpFloat *extra,
+                             int *rows, int k, int r) noexcept nogil:
+    # Row r of M = K + diag(extra) appended to the factor of rows[0:k]: its
+    # row of L by forward substitution; false if its pivot is not positive.
+    cdef int t, u
+    cdef cpFloat f
+    cdef cpFloat d = K[r][r] + extra[r]
+    for t in range(k):
+        f = K[r][rows[t]]
+        for u in range(t):
+            f -= L[k * SOFT_BLOCK_ROWS + u] * L[t * SOFT_BLOCK_ROWS + u]
+        f /= L[t * SOFT_BLOCK_ROWS + t]
+        L[k * SOFT_BLOCK_ROWS + t] = f
+        d -= f * f
+    if not (d > 0.0):
+        return 0
+    L[k * SOFT_BLOCK_ROWS + k] = sqrt(d)
+    rows[k] = r
+    return 1
+
+cdef void SoftCholeskyDrop(cpFloat *L, int k, int p) noexcept nogil:
+    # Row and column p taken out of the k-row factor: the rows below move
+    # up, and their old column p, v, goes into the block below p as the
+    # rank-one update L L' + v v' (rotations, which keep it positive).
+    cdef cpFloat v[SOFT_BLOCK_ROWS]
+    cdef int i, j, a, m = k - 1 - p
+    cdef cpFloat d, rr, c, s
+    for i in range(p + 1, k):
+        v[i - p - 1] = L[i * SOFT_BLOCK_ROWS + p]
+        for j in range(p):
+            L[(i - 1) * SOFT_BLOCK_ROWS + j] = L[i * SOFT_BLOCK_ROWS + j]
+        for j in range(p + 1, i + 1):
+            L[(i - 1) * SOFT_BLOCK_ROWS + j - 1] = L[i * SOFT_BLOCK_ROWS + j]
+    for a in range(m):
+        d = L[(p + a) * SOFT_BLOCK_ROWS + p + a]
+        rr = sqrt(d * d + v[a] * v[a])
+        c = rr / d
+        s = v[a] / d
+        L[(p + a) * SOFT_BLOCK_ROWS + p + a] = rr
+        for i in range(a + 1, m):
+            L[(p + i) * SOFT_BLOCK_ROWS + p + a] = (L[(p + i) * SOFT_BLOCK_ROWS + p + a] + s * v[i]) / c
+            v[i] = c * v[i] - s * L[(p + i) * SOFT_BLOCK_ROWS + p + a]
 
 cdef void SoftEachBlockContact(SoftContext *ctx, int body, bint useBias,
                                bint normals) noexcept nogil:
