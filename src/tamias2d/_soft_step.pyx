@@ -1258,7 +1258,7 @@ cdef bint SoftFindBlocks(SoftContext *ctx) noexcept nogil:
     cdef int *lists = <int *>_reserve(ctx.space, SOFT_SCRATCH_BLOCKS, 5 * nb + n, sizeof(int))
     cdef int *light
     cdef SoftColorKey *key
-    cdef int i, side, round, reach
+    cdef int i, side, round
     cdef bint grown
     if lists == NULL:
         return 0
@@ -1275,7 +1275,6 @@ cdef bint SoftFindBlocks(SoftContext *ctx) noexcept nogil:
                 light[key.ia if side == 1 else key.ib] = 1
     # Spread: in round r a body becomes light (light = r + 1) from one that
     # was light before the round (1 <= light <= r).
-    reach = 0
     for round in range(1, SOFT_BLOCK_SPREAD + 1):
         grown = 0
         for i in range(n):
@@ -1292,13 +1291,12 @@ cdef bint SoftFindBlocks(SoftContext *ctx) noexcept nogil:
                     grown = 1
         if not grown:
             break
-        reach = round
-    SoftGroupBlocks(ctx, light, lists + nb, lists + 4 * nb, reach)
+    SoftGroupBlocks(ctx, light, lists + nb, lists + 4 * nb)
     return 1
 
-cdef void SoftGroupBlocks(SoftContext *ctx, const int *light, int *parent, int *rows,
-                          int reach) noexcept nogil:
-    # The blocks of the bodies light within `reach` rounds (SoftFindBlocks),
+cdef void SoftGroupBlocks(SoftContext *ctx, const int *light, int *parent,
+                          int *rows) noexcept nogil:
+    # The blocks of the light bodies (light[slot] != 0, SoftFindBlocks),
     # their roots the lowest slots; one with more than SOFT_BLOCK_ROWS rows
     # (a normal and a tangent row per point) is left out.
     cdef int n = ctx.contactCount
@@ -1312,7 +1310,7 @@ cdef void SoftGroupBlocks(SoftContext *ctx, const int *light, int *parent, int *
         ctx.blockHead[i] = -1
     for i in range(n):
         key = &ctx.colorKeys[i]
-        if key.a != 0 and key.b != 0 and SoftInBlock(light, key.ia, reach) and SoftInBlock(light, key.ib, reach):
+        if key.a != 0 and key.b != 0 and light[key.ia] and light[key.ib]:
             ra = SoftBlockRoot(parent, key.ia)
             rb = SoftBlockRoot(parent, key.ib)
             if ra != rb:
@@ -1321,9 +1319,9 @@ cdef void SoftGroupBlocks(SoftContext *ctx, const int *light, int *parent, int *
     for i in range(n):
         key = &ctx.colorKeys[i]
         root = -1
-        if SoftInBlock(light, key.ia, reach):
+        if key.ia != 0 and light[key.ia]:
             root = SoftBlockRoot(parent, key.ia)
-        elif SoftInBlock(light, key.ib, reach):
+        elif key.ib != 0 and light[key.ib]:
             root = SoftBlockRoot(parent, key.ib)
         ctx.blockNext[i] = root
         if root >= 0:
@@ -1356,9 +1354,6 @@ cdef void SoftGroupBlocks(SoftContext *ctx, const int *light, int *parent, int *
             return
         for i in range(ctx.blockBodyCount):
             ctx.blockCache[i].built = 0
-
-cdef inline bint SoftInBlock(const int *light, int slot, int reach) noexcept nogil:
-    return slot != 0 and 1 <= light[slot] <= reach + 1
 
 cdef inline int SoftNotedIndex(int guess, cpBody *body, SoftContext *ctx) noexcept nogil:
     # SoftIndex, from the slot the narrow phase noted where it is right (the
