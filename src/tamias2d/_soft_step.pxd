@@ -237,7 +237,7 @@ cdef struct SoftContact:
     cpFloat surfaceT          # surface velocity along the tangent
     cpFloat k11, k12, k22     # normal effective-mass matrix of a two-point manifold
     bint block                # solve the two normal rows together (well conditioned)
-    bint inBlock              # its normal rows are solved in a light body's block (SoftSolveBlock)
+    bint inBlock              # its rows are solved in a block with others (SoftSolveBlock)
     SoftPoint p[2]
     cpArbiter *arb
 
