@@ -1804,11 +1804,11 @@ cdef void SoftSolveOverflow(SoftContext *ctx, bint useBias) noexcept nogil:
     for i in range(ctx.overflowCount):
         sc = &ctx.contacts[ctx.overflow[i]]
         if not sc.inBlock:
-            SoftSolveContact(ctx, sc, useBias, 1)
+            SoftSolveContact(ctx, sc, useBias)
     for i in range(ctx.blockBodyCount):
         if not SoftSolveBlock(ctx, i, useBias):
             # Too many rows, or no solution found: one by one.
-            SoftEachBlockContact(ctx, ctx.blockBodies[i], useBias, 1)
+            SoftEachBlockContact(ctx, ctx.blockBodies[i], useBias)
 
 # A block's points: each point of each of its contacts. Its rows are their
 # normal rows, then (in the relax passes) their tangent rows.
@@ -1817,17 +1817,16 @@ cdef struct SoftBlockRows:
     SoftContact *contact[SOFT_BLOCK_ROWS]
     int point[SOFT_BLOCK_ROWS]
 
-cdef inline bint SoftBlockGather(SoftContext *ctx, int root, int perPoint,
-                                 SoftBlockRows *rows) noexcept nogil:
-    # Block root's points; false beyond SOFT_BLOCK_ROWS rows (perPoint per
-    # point).
+cdef inline bint SoftBlockGather(SoftContext *ctx, int root, SoftBlockRows *rows) noexcept nogil:
+    # Block root's points; false beyond SOFT_BLOCK_ROWS rows (a normal and a
+    # tangent row per point).
     cdef int c = ctx.blockHead[root]
     cdef int j
     cdef SoftContact *sc
     rows.n = 0
     while c >= 0:
         sc = &ctx.contacts[c]
-        if (rows.n + sc.count) * perPoint > SOFT_BLOCK_ROWS:
+        if 2 * (rows.n + sc.count) > SOFT_BLOCK_ROWS:
             return 0
         for j in range(sc.count):
             rows.contact[rows.n] = sc
@@ -1954,7 +1953,7 @@ cdef bint SoftSolveBlock(SoftContext *ctx, int block, bint useBias) noexcept nog
     cdef bint settled
     cdef const SoftContact *sc
     cdef SoftPoint *sp
-    if not SoftBlockGather(ctx, ctx.blockBodies[block], 2, &rows):
+    if not SoftBlockGather(ctx, ctx.blockBodies[block], &rows):
         return 0
     n = rows.n
     m = n if useBias else 2 * n
@@ -2237,12 +2236,11 @@ cdef void SoftCholeskyDrop(cpFloat *L, int k, int p) noexcept nogil:
             L[(p + i) * SOFT_BLOCK_ROWS + p + a] = (L[(p + i) * SOFT_BLOCK_ROWS + p + a] + s * v[i]) / c
             v[i] = c * v[i] - s * L[(p + i) * SOFT_BLOCK_ROWS + p + a]
 
-cdef void SoftEachBlockContact(SoftContext *ctx, int body, bint useBias,
-                               bint normals) noexcept nogil:
+cdef void SoftEachBlockContact(SoftContext *ctx, int body, bint useBias) noexcept nogil:
     # SoftSolveContact over a light body's contacts.
     cdef int c = ctx.blockHead[body]
     while c >= 0:
-        SoftSolveContact(ctx, &ctx.contacts[c], useBias, normals)
+        SoftSolveContact(ctx, &ctx.contacts[c], useBias)
         c = ctx.blockNext[c]
 
 cdef inline bint SoftPointBias(SoftContext *ctx, const SoftContact *sc, int j,
@@ -2288,12 +2286,10 @@ cdef inline bint SoftPointBias(SoftContext *ctx, const SoftContact *sc, int j,
         held[0] = 0.0
     return 0
 
-cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias,
-                           bint normals) noexcept nogil:
+cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias) noexcept nogil:
     # One contact of the overflow. Velocities along n and t are a shared
     # linear part plus each point's angular part (cross products prepared
-    # once per step). Without `normals` only its friction (a block's
-    # contact, whose normal rows SoftSolveBlock solves).
+    # once per step).
     cdef int j
     cdef SoftPoint *sp
     cdef SoftPoint *p1
@@ -2326,120 +2322,119 @@ cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias,
     iB = b.i_inv
     nx = sc.nx
     ny = sc.ny
-    if normals:
-        for j in range(sc.count):
-            apart += SoftPointBias(ctx, sc, j, sa, sb, useBias, -1.0, &bias[j], &gamma[j],
-                                   &held[j])
-        if sc.block:
-            # Both normal rows at once: the linear complementarity problem
-            # w = A x + q, x >= 0, w >= 0, x.w = 0 for the accumulated
-            # impulses x, with A = K + diag(k_ii gamma_i) and
-            # q = vn + bias - K x0 - diag(k_ii gamma_i) held. A soft row's added
-            # diagonal is the soft constraint written as a compliance: (k + k
-            # gamma) dx = -(vn + bias) - k gamma (x0 - held) is the sequential
-            # massScale / impulseScale update exactly (with held 0). Cases in
-            # Box2D 2.x's order.
-            p1 = &sc.p[0]
-            p2 = &sc.p[1]
-            lin = (vbx - vax) * nx + (vby - vay) * ny
-            x01 = p1.normalImpulse
-            x02 = p2.normalImpulse
-            a12 = sc.k12
-            a11 = sc.k11 * (1.0 + gamma[0])
-            a22 = sc.k22 * (1.0 + gamma[1])
-            q1 = (lin + wb * p1.rnB - wa * p1.rnA + bias[0]
-                  - (sc.k11 * x01 + a12 * x02) - sc.k11 * gamma[0] * held[0])
-            q2 = (lin + wb * p2.rnB - wa * p2.rnA + bias[1]
-                  - (a12 * x01 + sc.k22 * x02) - sc.k22 * gamma[1] * held[1])
-            det = a11 * a22 - a12 * a12
-            x1 = (a12 * q2 - a22 * q1) / det
-            x2 = (a12 * q1 - a11 * q2) / det
-            if not (x1 >= 0.0 and x2 >= 0.0):
-                # Only the first point pushes.
-                x1 = -q1 / a11
-                x2 = 0.0
-                if not (x1 >= 0.0 and a12 * x1 + q2 >= 0.0):
-                    # Only the second.
+    for j in range(sc.count):
+        apart += SoftPointBias(ctx, sc, j, sa, sb, useBias, -1.0, &bias[j], &gamma[j],
+                               &held[j])
+    if sc.block:
+        # Both normal rows at once: the linear complementarity problem
+        # w = A x + q, x >= 0, w >= 0, x.w = 0 for the accumulated
+        # impulses x, with A = K + diag(k_ii gamma_i) and
+        # q = vn + bias - K x0 - diag(k_ii gamma_i) held. A soft row's added
+        # diagonal is the soft constraint written as a compliance: (k + k
+        # gamma) dx = -(vn + bias) - k gamma (x0 - held) is the sequential
+        # massScale / impulseScale update exactly (with held 0). Cases in
+        # Box2D 2.x's order.
+        p1 = &sc.p[0]
+        p2 = &sc.p[1]
+        lin = (vbx - vax) * nx + (vby - vay) * ny
+        x01 = p1.normalImpulse
+        x02 = p2.normalImpulse
+        a12 = sc.k12
+        a11 = sc.k11 * (1.0 + gamma[0])
+        a22 = sc.k22 * (1.0 + gamma[1])
+        q1 = (lin + wb * p1.rnB - wa * p1.rnA + bias[0]
+              - (sc.k11 * x01 + a12 * x02) - sc.k11 * gamma[0] * held[0])
+        q2 = (lin + wb * p2.rnB - wa * p2.rnA + bias[1]
+              - (a12 * x01 + sc.k22 * x02) - sc.k22 * gamma[1] * held[1])
+        det = a11 * a22 - a12 * a12
+        x1 = (a12 * q2 - a22 * q1) / det
+        x2 = (a12 * q1 - a11 * q2) / det
+        if not (x1 >= 0.0 and x2 >= 0.0):
+            # Only the first point pushes.
+            x1 = -q1 / a11
+            x2 = 0.0
+            if not (x1 >= 0.0 and a12 * x1 + q2 >= 0.0):
+                # Only the second.
+                x1 = 0.0
+                x2 = -q2 / a22
+                if not (x2 >= 0.0 and a12 * x2 + q1 >= 0.0):
+                    # Neither: both separate; with no solution at all
+                    # (round-off) the impulses stay.
                     x1 = 0.0
-                    x2 = -q2 / a22
-                    if not (x2 >= 0.0 and a12 * x2 + q1 >= 0.0):
-                        # Neither: both separate; with no solution at all
-                        # (round-off) the impulses stay.
-                        x1 = 0.0
-                        x2 = 0.0
-                        if not (q1 >= 0.0 and q2 >= 0.0):
-                            x1 = x01
-                            x2 = x02
-            d1 = x1 - x01
-            d2 = x2 - x02
-            p1.normalImpulse = x1
-            p2.normalImpulse = x2
-            if x1 > p1.maxNormalImpulse:
-                p1.maxNormalImpulse = x1
-            if x2 > p2.maxNormalImpulse:
-                p2.maxNormalImpulse = x2
-            imp = d1 + d2
-            vax -= mA * imp * nx
-            vay -= mA * imp * ny
-            wa -= iA * (p1.rnA * d1 + p2.rnA * d2)
-            vbx += mB * imp * nx
-            vby += mB * imp * ny
-            wb += iB * (p1.rnB * d1 + p2.rnB * d2)
-        elif sc.count == 2 and apart == 0:
-            # Two touching points too close for the block solve (the rows
-            # nearly the same): one row at their midpoint, its impulse shared
-            # equally. One after the other, the first point would take the
-            # whole load wherever it is, and a load off the centre turns the
-            # body: a many-sided polygon rolls from rest on it and speeds up.
-            # (Where one point is apart, the other alone touches: the rows stay
-            # separate.)
-            p1 = &sc.p[0]
-            p2 = &sc.p[1]
-            rnA = 0.5 * (p1.rnA + p2.rnA)
-            rnB = 0.5 * (p1.rnB + p2.rnB)
-            kN = mA + mB + iA * rnA * rnA + iB * rnB * rnB
-            x01 = p1.normalImpulse + p2.normalImpulse
-            vn = ((vbx - vax) * nx + (vby - vay) * ny) + wb * rnB - wa * rnA
-            meanBias = 0.5 * (bias[0] + bias[1])
-            meanGamma = 0.5 * (gamma[0] + gamma[1])
-            imp = ((-(vn + meanBias) / kN - meanGamma * (x01 - held[0] - held[1])) / (1.0 + meanGamma)
-                   if kN > 0.0 else 0.0)
-            newImp = x01 + imp
+                    x2 = 0.0
+                    if not (q1 >= 0.0 and q2 >= 0.0):
+                        x1 = x01
+                        x2 = x02
+        d1 = x1 - x01
+        d2 = x2 - x02
+        p1.normalImpulse = x1
+        p2.normalImpulse = x2
+        if x1 > p1.maxNormalImpulse:
+            p1.maxNormalImpulse = x1
+        if x2 > p2.maxNormalImpulse:
+            p2.maxNormalImpulse = x2
+        imp = d1 + d2
+        vax -= mA * imp * nx
+        vay -= mA * imp * ny
+        wa -= iA * (p1.rnA * d1 + p2.rnA * d2)
+        vbx += mB * imp * nx
+        vby += mB * imp * ny
+        wb += iB * (p1.rnB * d1 + p2.rnB * d2)
+    elif sc.count == 2 and apart == 0:
+        # Two touching points too close for the block solve (the rows
+        # nearly the same): one row at their midpoint, its impulse shared
+        # equally. One after the other, the first point would take the
+        # whole load wherever it is, and a load off the centre turns the
+        # body: a many-sided polygon rolls from rest on it and speeds up.
+        # (Where one point is apart, the other alone touches: the rows stay
+        # separate.)
+        p1 = &sc.p[0]
+        p2 = &sc.p[1]
+        rnA = 0.5 * (p1.rnA + p2.rnA)
+        rnB = 0.5 * (p1.rnB + p2.rnB)
+        kN = mA + mB + iA * rnA * rnA + iB * rnB * rnB
+        x01 = p1.normalImpulse + p2.normalImpulse
+        vn = ((vbx - vax) * nx + (vby - vay) * ny) + wb * rnB - wa * rnA
+        meanBias = 0.5 * (bias[0] + bias[1])
+        meanGamma = 0.5 * (gamma[0] + gamma[1])
+        imp = ((-(vn + meanBias) / kN - meanGamma * (x01 - held[0] - held[1])) / (1.0 + meanGamma)
+               if kN > 0.0 else 0.0)
+        newImp = x01 + imp
+        if newImp < 0.0:
+            newImp = 0.0
+        imp = newImp - x01
+        p1.normalImpulse = 0.5 * newImp
+        p2.normalImpulse = 0.5 * newImp
+        if p1.normalImpulse > p1.maxNormalImpulse:
+            p1.maxNormalImpulse = p1.normalImpulse
+        if p2.normalImpulse > p2.maxNormalImpulse:
+            p2.maxNormalImpulse = p2.normalImpulse
+        vax -= mA * imp * nx
+        vay -= mA * imp * ny
+        wa -= iA * imp * rnA
+        vbx += mB * imp * nx
+        vby += mB * imp * ny
+        wb += iB * imp * rnB
+    else:
+        for j in range(sc.count):
+            sp = &sc.p[j]
+            # (k + k gamma) dx = -(vn + bias) - k gamma (x0 - held), k = 1 / normalMass
+            vn = ((vbx - vax) * nx + (vby - vay) * ny) + wb * sp.rnB - wa * sp.rnA
+            imp = (-(sp.normalMass * (vn + bias[j]) + gamma[j] * (sp.normalImpulse - held[j]))
+                   / (1.0 + gamma[j]))
+            newImp = sp.normalImpulse + imp
             if newImp < 0.0:
                 newImp = 0.0
-            imp = newImp - x01
-            p1.normalImpulse = 0.5 * newImp
-            p2.normalImpulse = 0.5 * newImp
-            if p1.normalImpulse > p1.maxNormalImpulse:
-                p1.maxNormalImpulse = p1.normalImpulse
-            if p2.normalImpulse > p2.maxNormalImpulse:
-                p2.maxNormalImpulse = p2.normalImpulse
+            imp = newImp - sp.normalImpulse
+            sp.normalImpulse = newImp
+            if newImp > sp.maxNormalImpulse:
+                sp.maxNormalImpulse = newImp
             vax -= mA * imp * nx
             vay -= mA * imp * ny
-            wa -= iA * imp * rnA
+            wa -= iA * imp * sp.rnA
             vbx += mB * imp * nx
             vby += mB * imp * ny
-            wb += iB * imp * rnB
-        else:
-            for j in range(sc.count):
-                sp = &sc.p[j]
-                # (k + k gamma) dx = -(vn + bias) - k gamma (x0 - held), k = 1 / normalMass
-                vn = ((vbx - vax) * nx + (vby - vay) * ny) + wb * sp.rnB - wa * sp.rnA
-                imp = (-(sp.normalMass * (vn + bias[j]) + gamma[j] * (sp.normalImpulse - held[j]))
-                       / (1.0 + gamma[j]))
-                newImp = sp.normalImpulse + imp
-                if newImp < 0.0:
-                    newImp = 0.0
-                imp = newImp - sp.normalImpulse
-                sp.normalImpulse = newImp
-                if newImp > sp.maxNormalImpulse:
-                    sp.maxNormalImpulse = newImp
-                vax -= mA * imp * nx
-                vay -= mA * imp * ny
-                wa -= iA * imp * sp.rnA
-                vbx += mB * imp * nx
-                vby += mB * imp * ny
-                wb += iB * imp * sp.rnB
+            wb += iB * imp * sp.rnB
     if not useBias:
         # Friction only in the relax pass, as Box2D 3.2 does: there the
         # normal impulses that bound it are final for the substep.
