@@ -700,21 +700,15 @@ G_HARD, BOX = 900.0, 20.0
 
 
 def _ratio_space(gravity=(0.0, -G_HARD)):
+    # The hard cases' ground, thin (its top at y = 0) and of friction 1.
     space = tamias2d.Space(solver="soft")
     space.gravity = gravity
-    ground = tamias2d.Segment(space.static_body, (-2000, 0), (2000, 0), 0.0)
-    ground.friction = 1.0
-    space.add(ground)
+    hc._ground(tamias2d, space, radius=0.0, friction=1.0)
     return space
 
 
 def _ratio_box(space, x, y, mass, w=BOX, h=BOX):
-    body = tamias2d.Body(mass, tamias2d.moment_for_box(mass, (w, h)))
-    body.position = x, y
-    shape = tamias2d.Poly.create_box(body, (w, h))
-    shape.friction = 0.6
-    space.add(body, shape)
-    return body
+    return hc._box(tamias2d, space, x, y, w, h, mass=mass)
 
 
 @pytest.mark.parametrize("ratio", [30.0, 300.0, 1000.0, 1e4, 1e5])
