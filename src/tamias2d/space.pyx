@@ -126,7 +126,6 @@ cdef cpBB _shapeGetBB(void *obj) noexcept nogil:
     cdef cpBody *body = shape.body
     cdef cpBB bb = shape.bb
     cdef cpFloat m
-    cdef cpVect d
     if space == NULL or space.collideMargin == 0.0:
         return bb    # the chipmunk solver: the box as it is
     # The soft solver pairs shapes up to its speculative distance, and a
@@ -134,22 +133,21 @@ cdef cpBB _shapeGetBB(void *obj) noexcept nogil:
     # its bodies could close in the step (cpSpaceRejectPair), so the
     # broad phase must look that far.
     m = space.collideMargin
-    d = cpvmult(body.v, space.curr_dt)
-    if body.isBullet or space.dynamicShapes.klass != cpBBTreeClass():
-        # Grown by the step's travel on every side: its contacts may turn
-        # it within the step.
-        m += cpvlength(d)
+    if space.dynamicShapes.klass != cpBBTreeClass():
+        # A spatial hash has no static reach: grown by the step's travel on
+        # every side (its contacts may turn it within the step).
+        m += cpvlength(cpvmult(body.v, space.curr_dt))
         return cpBBNew(bb.l - m, bb.b - m, bb.r + m, bb.t + m)
-    # Swept along the step's travel. Two such boxes still meet wherever the
-    # bodies' approach along an axis could close the gap, and a falling
-    # pile pairs up few more shapes than one at rest. The turn a body's
-    # contacts may give it is the tree's static reach: the static tree is
-    # searched that far around a leaf (_soft_step.pyx SoftSetReach), and a
-    # kinematic shape's box grown by it.
-    if cpBodyGetType(body) == CP_BODY_TYPE_KINEMATIC:
-        m += cpBBTreeGetStaticReach(space.dynamicShapes)
-    return cpBBNew(bb.l - m + cpfmin(d.x, 0.0), bb.b - m + cpfmin(d.y, 0.0),
-                   bb.r + m + cpfmax(d.x, 0.0), bb.t + m + cpfmax(d.y, 0.0))
+    # In the tree, a plain dynamic box is its shape's box and the margin:
+    # two plain dynamic bodies pair on the margin alone, and a static pair
+    # is found by searching the static tree a reach around the leaf (at
+    # least the fastest body's travel, _soft_step.pyx SoftSetReach). A
+    # kinematic or bullet shape pairs with dynamic ones as far as the two
+    # close in the step, at most its own travel and the other's (which the
+    # reach covers), so its box grows by both.
+    if body.isBullet or cpBodyGetType(body) == CP_BODY_TYPE_KINEMATIC:
+        m += cpvlength(cpvmult(body.v, space.curr_dt)) + cpBBTreeGetStaticReach(space.dynamicShapes)
+    return cpBBNew(bb.l - m, bb.b - m, bb.r + m, bb.t + m)
 
 cdef void _shapeFetchBody(void *obj) noexcept nogil:
     # What _shapeGetBB and the tree's fattening read of a shape's body (its
