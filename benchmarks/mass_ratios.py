@@ -17,7 +17,8 @@ light box):
              it lands, in units, and the cost of a step
   impacts    three heavy balls (1000x) and a heavy plank dropped on 60
              light boxes, 10 seeds: in how many a light box is driven
-             through the floor, and the median cost of a step
+             through the floor, and the median cost of a step; the same
+             scene in Box2D v3 beside them when pyb2d3 is installed
 
     PYTHONPATH=src python benchmarks/mass_ratios.py [--seeds 10]
 """
@@ -143,11 +144,55 @@ def impacts(seed):
     return min(b.position.y for b in boxes) < 0.0, us
 
 
+def impacts_box2d(seed):
+    # The same scene and random draws in Box2D v3 (pyb2d3, 4 substeps), in
+    # boxes of 1 (Box2D's tolerances are for objects of about a metre).
+    import pyb2d3 as b2
+
+    def shape_def(density, friction, restitution=0.0):
+        d = b2.ShapeDef()
+        d.density = density
+        m = d.material
+        m.friction, m.restitution = friction, restitution
+        d.material = m
+        return d
+
+    rng = random.Random(seed)
+    world = b2.World(gravity=(0, -G / S))
+    world.sleeping_enabled = False
+    ground = world.create_static_body(position=(0, 0))
+    ground.create_segment_shape(shape_def(1.0, 1.0), b2.segment((-100, 0), (100, 0)))
+    for x in (-20.0, 20.0):
+        ground.create_capsule_shape(shape_def(1.0, 0.6), b2.capsule((x, 0), (x, 40), 0.1))
+    boxes = []
+    for i in range(60):
+        x, y = rng.uniform(-300, 300), 20 + (i // 10) * 25 + rng.uniform(0, 5)
+        body = world.create_dynamic_body(position=(x / S, y / S))
+        body.create_polygon_shape(shape_def(1.0, 0.6, rng.choice([0.0, 0.3])), b2.box(0.5, 0.5))
+        boxes.append(body)
+    r = 30 / S
+    for k in range(3):
+        ball = world.create_dynamic_body(position=((-200 + 200 * k) / S, 400 / S))
+        ball.create_circle_shape(shape_def(1000.0 / (math.pi * r * r), 0.6, 0.2), b2.circle((0, 0), r))
+    plank = world.create_dynamic_body(position=(0, 600 / S))
+    plank.create_polygon_shape(shape_def(1000.0 / 6.0, 0.6), b2.box(3.0, 0.5))
+    t0 = time.perf_counter()
+    for _ in range(1200):
+        world.step(1 / 60, 4)
+    us = (time.perf_counter() - t0) / 1200 * 1e6
+    return min(b.position[1] for b in boxes) < 0.0, us
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=10)
     args = ap.parse_args()
     modes = (("blocks", True), ("one by one", False))
+    try:
+        import pyb2d3  # noqa: F401
+        box2d = True
+    except ImportError:
+        box2d = False
     try:
         print("| resting (largest move, boxes; us a step) | " + " | ".join(m for m, _ in modes) + " |")
         print("|---|" + "---|" * len(modes))
@@ -171,6 +216,11 @@ def main():
             through = sum(1 for lost, _ in runs if lost)
             cells.append(f"{through} of {len(runs)} ({statistics.median(us for _, us in runs):.0f} us)")
         print("| impacts: seeds with a box through the floor | " + " | ".join(cells) + " |")
+        if box2d:
+            runs = [impacts_box2d(seed) for seed in range(1, args.seeds + 1)]
+            through = sum(1 for lost, _ in runs if lost)
+            print(f"| impacts in Box2D v3 (pyb2d3, 4 substeps) | {through} of {len(runs)} "
+                  f"({statistics.median(us for _, us in runs):.0f} us) | |")
     finally:
         _soft_step._mass_ratio_blocks(True)
 
