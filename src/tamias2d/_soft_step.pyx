@@ -23,7 +23,8 @@ Beyond Box2D's soft step (docs/stability.md measures each):
   * a loaded point's spring is preloaded with its load (SoftPreload), so a
     tall stack or a box under a heavier one stands at no depth, and a
     pyramid's bottom sinks half as deep as without;
-  * two relax passes per substep (SOFT_RELAX_ITERATIONS).
+  * two relax passes per substep (SOFT_RELAX_ITERATIONS) for two-point
+    manifolds; one-point contacts take part in the last only.
 
 Layout: bodies are gathered into one contiguous SoftBody array (slot 0 is the
 immovable body), contacts into one contiguous SoftContact array, once per
@@ -245,6 +246,7 @@ cdef struct SoftContext:
     SoftLanes *lanes          # the coloured contacts, colour by colour
     SoftLaneLinks *laneLinks  # beside each lane: its contacts' sources and destinations
     int colorLanes[SOFT_GRAPH_COLORS + 1]   # colour c: lanes[colorLanes[c]:colorLanes[c+1]]
+    int colorPairEnd[SOFT_GRAPH_COLORS]     # its two-point lanes end here, its one-point ones follow
     int *overflow             # SoftContact indices solved one by one
     volatile long shapesUpdated   # by SoftUpdateShapes
     int *contactSlots         # each contact's lane slot (lane * SOFT_LANES + k; -1: the overflow)
@@ -1643,6 +1645,7 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
         for kind in range(1, -1, -1):
             start[kind][c] = total
             total += (counts[kind][c] + SOFT_LANES - 1) // SOFT_LANES
+        ctx.colorPairEnd[c] = start[0][c]
     ctx.colorLanes[SOFT_GRAPH_COLORS] = total
     ctx.lanes = <SoftLanes *>_reserve_lines(space, SOFT_SCRATCH_LANES, total, sizeof(SoftLanes))
     ctx.laneLinks = <SoftLaneLinks *>_reserve(space, SOFT_SCRATCH_LANE_LINKS, total,
@@ -2484,10 +2487,16 @@ cdef void SoftRelax(SoftContext *ctx, bint last) noexcept nogil:
     # A relax pass: SoftSolve without bias. The substep's last also adds
     # the impulse the substep applied, its accumulated impulse after the
     # relax (the warm start re-applies the previous one), to the step's.
+    # The passes before it leave out the one-point lanes: the second pass
+    # is for the two-point manifolds that carry stacks, pyramids and arches;
+    # for points alone (circles, corners) it cost as much and changed no
+    # hard case's outcome (docs/stability.md).
     cdef int i, j
     cdef SoftContact *sc
     if not last:
-        SoftSolve(ctx, 0)
+        for i in range(SOFT_GRAPH_COLORS):
+            SoftRun(ctx, SOFT_TASK_SOLVE, ctx.colorLanes[i], ctx.colorPairEnd[i], 0)
+        SoftSolveOverflow(ctx, 0)
         return
     for i in range(SOFT_GRAPH_COLORS):
         SoftRun(ctx, SOFT_TASK_RELAX_ACCUMULATE, ctx.colorLanes[i], ctx.colorLanes[i + 1], 0)
