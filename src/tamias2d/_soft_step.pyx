@@ -2487,10 +2487,10 @@ cdef void SoftRelax(SoftContext *ctx, bint last) noexcept nogil:
     # A relax pass: SoftSolve without bias. The substep's last also adds
     # the impulse the substep applied, its accumulated impulse after the
     # relax (the warm start re-applies the previous one), to the step's.
-    # The passes before it leave out the one-point lanes: the second pass
-    # is for the two-point manifolds that carry stacks, pyramids and arches;
-    # for points alone (circles, corners) it cost as much and changed no
-    # hard case's outcome (docs/stability.md).
+    # The passes before the last leave out the one-point lanes: the extra
+    # pass is for the two-point manifolds that carry stacks, pyramids and
+    # arches; for points alone (circles, corners) it cost as much and
+    # changed no hard case's outcome (docs/stability.md).
     cdef int i, j
     cdef SoftContact *sc
     if not last:
