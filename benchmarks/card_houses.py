@@ -72,7 +72,7 @@ def tamias(solver, friction, substeps):
         shape.friction = math.sqrt(friction)
         space.add(body, shape)
         bodies.append(body)
-    return (lambda: space.step(1 / 60)), (lambda b: (tuple(b.position), b.angle)), bodies
+    return (lambda: space.step(1 / 60)), bodies
 
 
 def box2d(friction, substeps):
@@ -90,15 +90,19 @@ def box2d(friction, substeps):
         body = world.create_dynamic_body(position=(x, y), rotation=angle)
         body.create_polygon_shape(shape_def, b2.box(HALF_THICK, HALF_HEIGHT))
         bodies.append(body)
-    return ((lambda: world.step(1 / 60, substeps)),
-            (lambda b: (tuple(b.position), b.angle)), bodies)
+    return (lambda: world.step(1 / 60, substeps)), bodies
+
+
+def pose(body):
+    # Either engine's body: its position as a tuple, and its angle.
+    return tuple(body.position), body.angle
 
 
 def run(engine, friction, substeps):
     if engine == "box2d":
-        step, pose, bodies = box2d(friction, substeps)
+        step, bodies = box2d(friction, substeps)
     else:
-        step, pose, bodies = tamias(engine, friction, substeps)
+        step, bodies = tamias(engine, friction, substeps)
     home = [pose(b) for b in bodies]
     moved = turned = 0.0
     for _ in range(STEPS):

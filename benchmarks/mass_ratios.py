@@ -183,6 +183,14 @@ def impacts_box2d(seed):
     return min(b.position[1] for b in boxes) < 0.0, us
 
 
+def _impacts_cell(run, seeds):
+    # In how many seeds a light box ends below the floor, and the median
+    # cost of a step.
+    runs = [run(seed) for seed in range(1, seeds + 1)]
+    through = sum(1 for lost, _ in runs if lost)
+    return f"{through} of {len(runs)} ({statistics.median(us for _, us in runs):.0f} us)"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=10)
@@ -212,15 +220,11 @@ def main():
         cells = []
         for _, on in modes:
             _soft_step._mass_ratio_blocks(on)
-            runs = [impacts(seed) for seed in range(1, args.seeds + 1)]
-            through = sum(1 for lost, _ in runs if lost)
-            cells.append(f"{through} of {len(runs)} ({statistics.median(us for _, us in runs):.0f} us)")
+            cells.append(_impacts_cell(impacts, args.seeds))
         print("| impacts: seeds with a box through the floor | " + " | ".join(cells) + " |")
         if box2d:
-            runs = [impacts_box2d(seed) for seed in range(1, args.seeds + 1)]
-            through = sum(1 for lost, _ in runs if lost)
-            print(f"| impacts in Box2D v3 (pyb2d3, 4 substeps) | {through} of {len(runs)} "
-                  f"({statistics.median(us for _, us in runs):.0f} us) | |")
+            print(f"| impacts in Box2D v3 (pyb2d3, 4 substeps) | "
+                  f"{_impacts_cell(impacts_box2d, args.seeds)} | |")
     finally:
         _soft_step._mass_ratio_blocks(True)
 
