@@ -1528,8 +1528,6 @@ cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept 
         con.bias = age + 1.0
         con.jBias = load
         con.bounce = sp.relativeVelocity * arb.e
-    if sc.count == 2:
-        SoftPrepareBlock(sc, a, b)
 
 # Above this condition number the two normal rows are nearly dependent (the
 # points almost coincide) and are solved as one row at their midpoint
@@ -1679,9 +1677,16 @@ cdef void SoftPrepareLanes(SoftContext *ctx) noexcept nogil:
     # pool), the others into ctx.contacts, which keeps a coloured one only
     # where restitution will read it (SoftPackLanes).
     cdef int i
+    cdef SoftContact *sc
     SoftRun(ctx, SOFT_TASK_PACK, 0, ctx.contactCount, 0)
     for i in range(ctx.overflowCount):
-        SoftPrepareContact(ctx, ctx.overflow[i], &ctx.contacts[ctx.overflow[i]])
+        sc = &ctx.contacts[ctx.overflow[i]]
+        SoftPrepareContact(ctx, ctx.overflow[i], sc)
+        if sc.count == 2:
+            # Only the one-by-one solve (SoftSolveContact) reads the 2x2
+            # matrix: a lane works it out from the arms, and the count's
+            # SoftContactKind has already decided the lane's kind.
+            SoftPrepareBlock(sc, &ctx.bodies[sc.ia], &ctx.bodies[sc.ib])
 
 cdef inline void SoftFetchSlot(SoftContext *ctx, int i) noexcept nogil:
     # What the preparation reads of a body slot (in a large scene the
