@@ -53,6 +53,8 @@ except ImportError:  # run from a checkout that is not installed
 import pymunk
 import pyb2d3 as b2
 
+from harness import box2d_shape_def
+
 DT = 1.0 / 60.0
 GRAVITY = -10.0
 FRICTION = 0.6
@@ -71,12 +73,7 @@ class Box2DEngine:
 
     @staticmethod
     def _sdef(density):
-        d = b2.ShapeDef()
-        d.density = density
-        m = d.material
-        m.friction = FRICTION
-        d.material = m
-        return d
+        return box2d_shape_def(b2, density, FRICTION)
 
     def static_box(self, cx, cy, hw, hh):
         self.ground.create_polygon_shape(self._sdef(1.0), b2.box(hw, hh, center=(cx, cy)))

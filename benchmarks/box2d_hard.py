@@ -18,6 +18,8 @@ import sys
 
 import tamias2d
 
+from harness import box2d_shape_def
+
 STEPS = 600
 DT = 1.0 / 60.0
 SCENES = (("stack 20", "stack", 20), ("stack 40", "stack", 40), ("pyr 20", "pyramid", 20),
@@ -69,12 +71,7 @@ class Box2D:
         ground.create_polygon_shape(self.sdef(1.0), b2.box(2000, 0.5))
 
     def sdef(self, density):
-        d = self.b2.ShapeDef()
-        d.density = density
-        m = d.material
-        m.friction = 0.6
-        d.material = m
-        return d
+        return box2d_shape_def(self.b2, density, 0.6)
 
     def box(self, x, y, size, mass=1.0):
         b = self.w.create_dynamic_body(position=(x, y))

@@ -25,6 +25,8 @@ import sys
 
 import tamias2d
 
+from harness import box2d_shape_def
+
 HALF_HEIGHT, HALF_THICK = 0.2, 0.001
 FRICTIONS = (0.7, 0.6, 0.49)
 SUBSTEPS = (4, 8)
@@ -79,10 +81,7 @@ def box2d(friction, substeps):
     import pyb2d3 as b2
     world = b2.World(gravity=(0, -10))
     world.sleeping_enabled = False
-    shape_def = b2.ShapeDef()
-    material = shape_def.material
-    material.friction = friction
-    shape_def.material = material
+    shape_def = box2d_shape_def(b2, friction=friction)
     ground = world.create_static_body(position=(0, -2))
     ground.create_polygon_shape(shape_def, b2.box(40, 2))
     bodies = []

@@ -110,6 +110,25 @@ def same_state(a, b):
     return sa == sb
 
 
+def box2d_shape_def(b2, density=1.0, friction=None, restitution=None, group_index=None):
+    """A pyb2d3 ``ShapeDef``. pyb2d3 hands out copies of a definition's
+    material and filter, so each is changed and then set back."""
+    d = b2.ShapeDef()
+    d.density = density
+    if friction is not None or restitution is not None:
+        m = d.material
+        if friction is not None:
+            m.friction = friction
+        if restitution is not None:
+            m.restitution = restitution
+        d.material = m
+    if group_index is not None:
+        f = d.filter
+        f.group_index = group_index
+        d.filter = f
+    return d
+
+
 def finite(x):
     return isinstance(x, (int, float)) and math.isfinite(x)
 

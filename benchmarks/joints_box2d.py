@@ -19,6 +19,8 @@ import math
 
 import tamias2d
 
+from harness import box2d_shape_def
+
 LINKS = 15
 STEPS = 300
 DT = 1.0 / 60.0
@@ -65,11 +67,7 @@ def box2d_chain(ratio, substeps=4):
     prev = ground
     for i in range(LINKS):
         b = w.create_dynamic_body(position=((20 * i + 10) * scale, 0))
-        d = b2.ShapeDef()
-        d.density = 1.0
-        f = d.filter
-        f.group_index = -1
-        d.filter = f
+        d = box2d_shape_def(b2, 1.0, group_index=-1)
         b.create_capsule_shape(d, b2.capsule((-half, 0), (half, 0), 2 * scale))
         anchor = (20 * i * scale, 0) if prev is ground else (half, 0)
         w.create_revolute_joint(body_a=prev, body_b=b, local_anchor_a=anchor,
@@ -78,11 +76,7 @@ def box2d_chain(ratio, substeps=4):
         prev = b
     radius = 10 * scale
     ball = w.create_dynamic_body(position=((20 * LINKS + 10) * scale, 0))
-    d = b2.ShapeDef()
-    d.density = ratio * links[0].mass / (math.pi * radius * radius)
-    f = d.filter
-    f.group_index = -1
-    d.filter = f
+    d = box2d_shape_def(b2, ratio * links[0].mass / (math.pi * radius * radius), group_index=-1)
     ball.create_circle_shape(d, b2.circle(radius=radius))
     w.create_revolute_joint(body_a=prev, body_b=ball, local_anchor_a=(half, 0),
                             local_anchor_b=(-half, 0))

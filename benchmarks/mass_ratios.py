@@ -31,6 +31,8 @@ import time
 import tamias2d
 from tamias2d import _soft_step
 
+from harness import box2d_shape_def
+
 G, S = 900.0, 20.0
 
 
@@ -150,12 +152,7 @@ def impacts_box2d(seed):
     import pyb2d3 as b2
 
     def shape_def(density, friction, restitution=0.0):
-        d = b2.ShapeDef()
-        d.density = density
-        m = d.material
-        m.friction, m.restitution = friction, restitution
-        d.material = m
-        return d
+        return box2d_shape_def(b2, density, friction, restitution)
 
     rng = random.Random(seed)
     world = b2.World(gravity=(0, -G / S))
