@@ -122,6 +122,8 @@ def main(argv=None):
         # longer run.
         sys.stdout.flush()
         os._exit(0)
+    if args.solver == "box2d" and not args.box2d:
+        ap.error("--solver box2d needs --box2d (against_box2d.py's scenes)")
     if args.long <= args.short:
         ap.error("--long must be more than --short")
     if shutil.which("valgrind") is None:
