@@ -91,7 +91,9 @@ def count(name, steps, solver, iterations, box2d=False, functions=False):
             cmd += ["--iterations", str(iterations)]
         if box2d:
             cmd += ["--box2d"]
-        env = dict(os.environ, PYTHONHASHSEED="0")
+        # (numpy, which pyb2d3 imports, would start OpenBLAS's threads, whose
+        # waiting adds a varying count.)
+        env = dict(os.environ, PYTHONHASHSEED="0", OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
         run = subprocess.run(cmd, env=env, capture_output=True, text=True)
         found = re.search(r"Collected : (\d+)", run.stderr)
         if run.returncode != 0 or not found:
