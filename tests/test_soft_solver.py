@@ -596,14 +596,22 @@ def test_error_bias_changes_nothing_in_the_soft_solver():
     assert run(0.1) == run(0.9)
 
 
+def _benchmark(name):
+    # A module of benchmarks/ (whose scenes some tests share).
+    import importlib
+    import os
+    import sys
+    folder = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "benchmarks")
+    if folder not in sys.path:
+        sys.path.insert(0, folder)
+    return importlib.import_module(name)
+
+
 def _heavy_chain(solver):
     # benchmarks/joints_box2d.py's chain of 15 pivot links carrying a ball of
     # 100 times a link's mass: the worst pivot gap over the run and over its
     # last second
-    import os
-    import sys
-    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "benchmarks"))
-    import joints_box2d
+    joints_box2d = _benchmark("joints_box2d")
     return joints_box2d.run(*joints_box2d.tamias_chain(100.0, solver))
 
 
@@ -620,14 +628,6 @@ def test_a_heavy_chain_holds_in_the_soft_solver():
     assert chip_worst > 20.0, chip_worst
 
 
-def _card_houses():
-    import os
-    import sys
-    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "benchmarks"))
-    import card_houses
-    return card_houses
-
-
 def test_box2d_card_house_stands_in_the_soft_solver():
     # Box2D's card house sample (thin cards 0.002 x 0.4 leaning at 25
     # degrees) at a contact friction of 0.6, where Box2D v3 holds it. The
@@ -635,7 +635,7 @@ def test_box2d_card_house_stands_in_the_soft_solver():
     # card's centre; solved as a block they swung the load between the
     # corners and the house fell (moved 2.2 m); the criterion, a quarter of
     # a card's length and 0.1 rad, was set before the fix.
-    houses = _card_houses()
+    houses = _benchmark("card_houses")
     for substeps in (4, 8):
         stands, moved, turned = houses.run("soft", 0.6, substeps)
         assert stands, (substeps, moved, turned)
