@@ -1382,8 +1382,38 @@ def _static_changes():
     return s
 
 
+def _sleepy_pyramid():
+    # A pyramid with sleeping on that stays awake for a while, and what may
+    # change the bodies' arbiter lists between steps: a box put to sleep by
+    # hand and woken again, a box taken out, a box dropped on the pile once
+    # it sleeps, and the threshold turned off and on.
+    import scenes
+    s = scenes.pyramid(tamias2d, rows=8)
+    s.sleep_time_threshold = 0.4
+    boxes = [b for b in s.bodies if b.body_type == tamias2d.Body.DYNAMIC]
+
+    def hook(i):
+        if i == 8:
+            boxes[10].sleep()
+        elif i == 10:
+            boxes[10].activate()
+        elif i == 14:
+            s.remove(boxes[20], *boxes[20].shapes)
+        elif i == 18:
+            s.sleep_time_threshold = float("inf")
+        elif i == 22:
+            s.sleep_time_threshold = 0.4
+        elif i == 100:
+            b = tamias2d.Body(1, tamias2d.moment_for_box(1, (20, 20)))
+            b.position = 0, 300
+            s.add(b, tamias2d.Poly.create_box(b, (20, 20)))
+    s.scene_hook = hook
+    return s
+
+
 # The scenes the same-bits tests below run with a switch off and on.
-_SWITCH_SCENES = {"sleepy_pile": _sleepy_pile, "static_changes": _static_changes,
+_SWITCH_SCENES = {"sleepy_pile": _sleepy_pile, "sleepy_pyramid": _sleepy_pyramid,
+                  "static_changes": _static_changes,
                   "rain_persistence_1": lambda: _short_memory_rain(1),
                   "rain_persistence_0": lambda: _short_memory_rain(0)}
 
@@ -1466,14 +1496,17 @@ def test_skipping_the_idle_arbiter_filter_changes_nothing(scene, solver):
 
 
 @pytest.mark.parametrize("scene", ["pyramid", "add_remove", "type_changes", "static_changes",
-                                   "rain_persistence_1", "rain_persistence_0"])
+                                   "rain_persistence_1", "rain_persistence_0", "sleepy_pile",
+                                   "sleepy_pyramid"])
 def test_arbiters_left_threaded_change_nothing(scene):
     # Where nothing can look at the bodies' arbiter lists during the
     # collision, a soft step leaves last step's arbiters threaded and
     # threads or unthreads only those that came or went: each body's list
     # must hold the arbiters that Munk2D's unthreading and threading of
     # every arbiter at every step gives (in another order), and the bodies
-    # must move alike.
+    # must move alike. With sleeping on (whose flood fill follows the
+    # lists' order) they are kept only where they are the array's in order,
+    # and the steps that keep them must also be the same bits.
     from tamias2d import _soft_step
     build = _switch_scene(scene)
 
@@ -1510,7 +1543,7 @@ def test_arbiters_left_threaded_change_nothing(scene):
         _soft_step._keep_arbiter_threads(True)
     kept = _soft_step._kept_threads_count()
     lists, bodies = run()
-    if scene in ("pyramid", "static_changes"):
+    if scene in ("pyramid", "static_changes", "sleepy_pile", "sleepy_pyramid"):
         assert _soft_step._kept_threads_count() > kept, "no step kept its threads: nothing tested"
     assert lists == lists_munk2d
     assert repr(bodies) == repr(bodies_munk2d)

@@ -50,7 +50,7 @@ from cpython.pythread cimport (PyThread_type_lock, PyThread_allocate_lock,
 cdef extern from "pythread.h" nogil:
     unsigned long PyThread_start_new_thread(void (*func)(void *) noexcept nogil, void *arg)
 from tamias2d.vector cimport cpVect, cpv, cpTransformNewTranspose
-from tamias2d.body cimport cpBodyGetType, cpBodyUpdateVelocity, cpBodyUpdatePosition
+from tamias2d.body cimport cpBodyGetType, cpBodyIsSleeping, cpBodyUpdateVelocity, cpBodyUpdatePosition
 from tamias2d.constraints cimport tamias_constraint_scale_impulse
 from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, StageResetArbiters,
     cpSpaceProcessComponents, StageFilterArbiterCache, StagePostSolve,
@@ -273,6 +273,8 @@ cdef struct SoftContext:
     int *blockNext            # per contact: the next one of its block
     SoftBlockCache *blockCache    # per block (blockBodies' order), built by its first pass
     int threadedCount         # last step's arbiters left threaded (-1: unthreaded as Munk2D)
+    bint threadsExact         # ... and, sleeping being on, only if this step's are the same
+    bint threadsEmptied       # sleeping on, nothing asleep: the reset left no arbiter threaded
     bint threaded             # stages may run on the pool (SoftRun)
     bint serialVelocities     # a body has its own velocity_func (Python: one thread)
     bint serialPositions      # a body has its own position_func
@@ -827,13 +829,26 @@ cdef void SoftMoveContacts(SoftContext *ctx, int begin, int end) noexcept nogil:
 # order its pair comes in.
 
 cdef void SoftResetArbiters(SoftContext *ctx) noexcept nogil:
+    # Last step's arbiters are left threaded until the narrow phase has
+    # found this step's (SoftRethreadArbiters), where nothing can look at
+    # the lists meanwhile. With sleeping on, only after a step whose lists
+    # were exactly its arrays's, threaded in order, with nothing asleep
+    # (cpSoftScratch.threadsClean): the flood fill follows the lists'
+    # order, so they are kept only when re-threading would give the same.
     cdef cpSpace *space = ctx.space
     cdef cpArray *arbiters = space.arbiters
     cdef void **saved
     cdef int i
+    cdef bint sleep = space.sleepTimeThreshold != INFINITY
+    cdef bint clean = space.softScratch.threadsClean + 1 == space.stamp
     ctx.threadedCount = -1
-    if (_keep_threads and space.sleepTimeThreshold == INFINITY
-            and space.collisionPersistence > 0 and not cpSpaceHasHandlers(space, 1, 1, 0)):
+    ctx.threadsExact = sleep
+    ctx.threadsEmptied = sleep and space.sleepingComponents.num == 0
+    # Anything that wakes or sleeps a body or drops an arbiter from here on
+    # resets it (see SoftProcessComponents).
+    space.softScratch.threadsClean = space.stamp
+    if (_keep_threads and space.collisionPersistence > 0 and not cpSpaceHasHandlers(space, 1, 1, 0)
+            and (not sleep or (ctx.threadsEmptied and clean))):
         saved = <void **>_reserve(space, SOFT_SCRATCH_THREADED, arbiters.num, sizeof(void *))
         if saved != NULL:
             for i in range(arbiters.num):
@@ -845,24 +860,33 @@ cdef void SoftResetArbiters(SoftContext *ctx) noexcept nogil:
             return
     StageResetArbiters(space)
 
-cdef int SoftRethreadArbiters(SoftContext *ctx, int collided) noexcept nogil:
-    # How many of this step's arbiters cpSpaceProcessComponents must thread:
-    # none if the lists hold them already. With last step's arbiters still
-    # threaded (SoftResetArbiters), only the difference is done here: this
-    # step's arbiters that were not last step's are pushed onto their
-    # bodies' lists (in array order), then last step's that are not this
-    # step's are unlinked. (A full re-threading writes every body's list
-    # head and every arbiter's links: most of a settled pile's step when
-    # one of its thousands of contacts comes or goes.)
+cdef bint SoftRethreadArbiters(SoftContext *ctx, int collided) noexcept nogil:
+    # Whether this step's arbiters are threaded already (else
+    # cpSpaceProcessComponents threads them). With last step's arbiters
+    # still threaded (SoftResetArbiters), they are if they are the same, in
+    # the same order. Otherwise, with sleeping on, last step's are unlinked
+    # here as Munk2D does before the narrow phase (StageResetArbiters), and
+    # the step threads them all. With sleeping off only the difference is
+    # done: this step's arbiters that were not last step's are pushed onto
+    # their bodies' lists (in array order), then last step's that are not
+    # this step's are unlinked. (A full re-threading writes every body's
+    # list head and every arbiter's links: most of a settled pile's step
+    # when one of its thousands of contacts comes or goes.)
     cdef cpSpace *space = ctx.space
     cdef void **saved = <void **>space.softScratch.buf[SOFT_SCRATCH_THREADED]
     cdef cpArbiter *arb
     cdef int i
     if ctx.threadedCount < 0:
-        return collided
+        return 0
     if (ctx.threadedCount == collided and collided == space.arbiters.num
             and memcmp(saved, space.arbiters.arr, collided * sizeof(void *)) == 0):
         tamias_add(&_kept_threads, 1)
+        return 1
+    if ctx.threadsExact:
+        for i in range(ctx.threadedCount):
+            arb = <cpArbiter *>saved[i]
+            if not cpBodyIsSleeping(arb.body_a) and not cpBodyIsSleeping(arb.body_b):
+                cpArbiterUnthread(arb)
         return 0
     for i in range(collided):
         arb = <cpArbiter *>space.arbiters.arr[i]
@@ -875,7 +899,19 @@ cdef int SoftRethreadArbiters(SoftContext *ctx, int collided) noexcept nogil:
         if arb.softThreaded == space.stamp:
             arb.softThreaded = 0
             cpArbiterUnthread(arb)
-    return 0
+    return 1
+
+
+cdef void SoftProcessComponents(SoftContext *ctx, cpFloat dt, int collided) noexcept nogil:
+    # The contact graph stage, and whether its lists end up exactly the
+    # step's array, threaded in order, with nothing asleep: then the next
+    # step may keep them (SoftResetArbiters). Waking or putting a body to
+    # sleep in between resets the mark (cpSpaceActivateBody and the like).
+    cdef cpSpace *space = ctx.space
+    cpSpaceProcessComponents(space, dt, collided, SoftRethreadArbiters(ctx, collided))
+    if not (ctx.threadsEmptied and space.softScratch.threadsClean == space.stamp
+            and space.sleepingComponents.num == 0 and space.arbiters.num == collided):
+        space.softScratch.threadsClean = 0
 
 
 # -- gather ----------------------------------------------------------------------------
@@ -3094,7 +3130,7 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     cpSpaceUnlock(space, 0)
     SoftProfileMark(SOFT_STAGE_ARBITERS)
 
-    cpSpaceProcessComponents(space, dt, SoftRethreadArbiters(&ctx, collided))
+    SoftProcessComponents(&ctx, dt, collided)
 
     cpSpaceLock(space)
     StageFilterArbiterCache(space)

@@ -74,9 +74,11 @@ cdef void cpSpaceDeactivateBody(cpSpace *space, cpBody *body) noexcept nogil
 # Wakes every body of the sleeping component rooted at `root` and drops the
 # component (cpBodyActivate's space half).
 cdef void cpSpaceWakeComponent(cpSpace *space, cpBody *root) noexcept nogil
-# Threads this step's first `threadCount` arbiters into the contact graph,
-# updates idle times and puts idle components to sleep.
-cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int threadCount) noexcept nogil
+# Threads this step's first `count` arbiters into the contact graph (unless
+# `threaded`: they are already), wakes what they touch, updates idle times
+# and puts idle components to sleep.
+cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count,
+                                   bint threaded) noexcept nogil
 
 # A dynamic body removed from the space while its shapes stayed (pymunk
 # allows it). The space no longer integrates it, so, like a kinematic body, it

@@ -406,7 +406,7 @@ cdef void cpSpaceStep(cpSpace *space, cpFloat dt) noexcept nogil:
     collided = space.arbiters.num
     cpSpaceUnlock(space, 0)
 
-    cpSpaceProcessComponents(space, dt, collided)
+    cpSpaceProcessComponents(space, dt, collided, 0)
 
     cpSpaceLock(space)
     StageFilterArbiterCache(space)
@@ -578,6 +578,9 @@ cdef void cpSpaceActivateBody(cpSpace *space, cpBody *body) noexcept nogil:
         return
 
     cpArrayPush(space.dynamicBodies, body)
+    # (Its arbiters join the step's array, threaded: the lists are no longer
+    # the array's alone.)
+    space.softScratch.threadsClean = 0
 
     shape = body.shapeList
     while shape != NULL:
@@ -632,6 +635,7 @@ cdef void cpSpaceDeactivateBody(cpSpace *space, cpBody *body) noexcept nogil:
     cdef cpConstraint *constraint
 
     cpArrayDeleteObj(space.dynamicBodies, body)
+    space.softScratch.threadsClean = 0
 
     shape = body.shapeList
     while shape != NULL:
@@ -765,13 +769,14 @@ cdef inline cpBool ComponentActive(cpBody *root, cpFloat threshold) noexcept nog
         body = body.sleeping.next
     return 0
 
-cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int threadCount) noexcept nogil:
+cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count,
+                                   bint threaded) noexcept nogil:
     cdef cpBool sleep = space.sleepTimeThreshold != INFINITY
     cdef cpArray *bodies = space.dynamicBodies
     cdef cpArray *arbiters
     cdef cpArray *constraints
     cdef cpFloat dv, dvsq, keThreshold
-    cdef int i, count, outside
+    cdef int i, outside
     cdef cpBody *body
     cdef cpBody *a
     cdef cpBody *b
@@ -797,19 +802,20 @@ cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int threadCount) 
     # this step into their bodies' lists (head insertion, in array order).
     # Arbiters appended from here on, by waking, are threaded already.
     arbiters = space.arbiters
-    count = threadCount
-    for i in range(count):
-        arb = <cpArbiter *>arbiters.arr[i]
-        a = arb.body_a
-        b = arb.body_b
-        if sleep:
-            if (cpBodyGetType(b) == CP_BODY_TYPE_KINEMATIC or cpBodyIsSleeping(a)
-                    or _orphanBody(b, space)):
-                cpBodyActivate(a)
-            if (cpBodyGetType(a) == CP_BODY_TYPE_KINEMATIC or cpBodyIsSleeping(b)
-                    or _orphanBody(a, space)):
-                cpBodyActivate(b)
-        cpArbiterPushThreads(arb)
+    if sleep or not threaded:
+        for i in range(count):
+            arb = <cpArbiter *>arbiters.arr[i]
+            a = arb.body_a
+            b = arb.body_b
+            if sleep:
+                if (cpBodyGetType(b) == CP_BODY_TYPE_KINEMATIC or cpBodyIsSleeping(a)
+                        or _orphanBody(b, space)):
+                    cpBodyActivate(a)
+                if (cpBodyGetType(a) == CP_BODY_TYPE_KINEMATIC or cpBodyIsSleeping(b)
+                        or _orphanBody(a, space)):
+                    cpBodyActivate(b)
+            if not threaded:
+                cpArbiterPushThreads(arb)
 
     if sleep:
         # Bodies jointed to a kinematic body stay awake.

@@ -398,6 +398,12 @@ cdef struct cpSoftScratch:
     # pair count and the dynamic tree's version after it (0: no walk kept).
     int pairCount
     unsigned long long pairsVersion
+    # With sleeping on: the stamp of the last soft step after whose contact
+    # graph stage every body's arbiter list held exactly that step's
+    # arbiters, threaded in array order, and nothing slept (0: not known).
+    # Waking, sleeping and dropping arbiters reset it (_space_step.pyx,
+    # space.pyx); the next step may then leave those lists as they are.
+    cpTimestamp threadsClean
 
 cdef struct cpContactBufferHeader:
     cpTimestamp stamp

@@ -393,6 +393,8 @@ cdef cpBool cachedArbitersFilter(void *elt, void *data) noexcept nogil:
             cpCallHandlers(arb, context.space, PHASE_SEPARATE, False)
         cpArbiterUnthread(arb)
         cpArrayDeleteObj(context.space.arbiters, arb)
+        # (The array's order changed: see cpSoftScratch.threadsClean.)
+        context.space.softScratch.threadsClean = 0
         cpArrayPush(context.space.pooledArbiters, arb)
         cpSpaceArbiterLeavesCache(context.space, arb)
         arb.cached = 0
@@ -428,6 +430,7 @@ cdef void _dropExpiredArbiters(cpSpace *space, cpShape *shape) noexcept nogil:
         if arb.a == shape or arb.b == shape:
             cpArbiterUnthread(arb)
             cpArrayDeleteObj(arbiters, arb)
+            space.softScratch.threadsClean = 0
             if not cpArrayContains(space.pooledArbiters, arb):
                 cpArrayPush(space.pooledArbiters, arb)
             arb.a = NULL
