@@ -10,6 +10,11 @@ the arbiter hash set, shapes and bodies), which instruction counts hide.
 scenes are in docs/benchmarks.md.
 
     PYTHONPATH=src:tests python benchmarks/soft_profile.py [--steps 120] [--quick]
+        [--scenes large_pyramid ...] [--sleep 0.5]
+
+--sleep sets every scene's sleep_time_threshold (off by default, as in
+benchmarks/against_box2d.py), for the cost of sleeping while a pile is
+still awake.
 """
 import argparse
 import os
@@ -52,9 +57,11 @@ SCENES = {
 }
 
 
-def profile(build, threads, steps, warm):
+def profile(build, threads, steps, warm, sleep=None):
     space = build()
     space.solver = "soft"
+    if sleep is not None:
+        space.sleep_time_threshold = sleep
     space.threaded = True
     space.threads = threads
     hook = getattr(space, "scene_hook", None)
@@ -73,8 +80,11 @@ def main():
     ap.add_argument("--warm", type=int, default=30)
     ap.add_argument("--repeats", type=int, default=3, help="runs per row; the median of each stage")
     ap.add_argument("--quick", action="store_true", help="a few steps of the small scenes")
+    ap.add_argument("--scenes", nargs="+", choices=list(SCENES), default=list(SCENES))
+    ap.add_argument("--sleep", type=float, default=None,
+                    help="sleep_time_threshold of every scene (default: sleeping off)")
     args = ap.parse_args()
-    names = list(SCENES)
+    names = args.scenes
     if args.quick:
         names = ["pyramid_20", "drum"]
         args.steps, args.warm, args.repeats = 10, 5, 1
@@ -83,7 +93,7 @@ def main():
     print("|---|---|" + "---|" * (len(stages) + 1))
     for name in names:
         for threads in (1, 2):
-            runs = [profile(SCENES[name], threads, args.steps, args.warm)
+            runs = [profile(SCENES[name], threads, args.steps, args.warm, args.sleep)
                     for _ in range(args.repeats)]
             ms = {s: statistics.median(r[s] for r in runs) for s in stages}
             cells = " | ".join(f"{ms[s]:.3f}" for s in stages)

@@ -1411,8 +1411,46 @@ def _sleepy_pyramid():
     return s
 
 
+def _sleepy_joints():
+    # Sleeping on, with joints: pairs of boxes pinned together on the ground
+    # (one component each, through the joint), a pendulum that keeps
+    # swinging, a box carried by a moving kinematic platform (kept awake by
+    # it) and a loose box dropped on the first pair late.
+    s = tamias2d.Space()
+    s.gravity = 0, -900
+    s.sleep_time_threshold = 0.3
+    ground = tamias2d.Segment(s.static_body, (-400, 0), (400, 0), 2)
+    ground.friction = 0.8
+    s.add(ground)
+
+    def box(x, y, mass=1.0):
+        b = tamias2d.Body(mass, tamias2d.moment_for_box(mass, (20, 20)))
+        b.position = x, y
+        shape = tamias2d.Poly.create_box(b, (20, 20))
+        shape.friction = 0.8
+        s.add(b, shape)
+        return b
+    for i in range(4):
+        left, right = box(-300 + 90 * i, 12), box(-270 + 90 * i, 12 + 5 * i)
+        s.add(tamias2d.PinJoint(left, right))
+    bob = box(200, 150)
+    s.add(tamias2d.PinJoint(s.static_body, bob, (150, 150), (0, 0)))
+    platform = tamias2d.Body(body_type=tamias2d.Body.KINEMATIC)
+    platform.position = 300, 40
+    platform.velocity = 3, 0
+    s.add(platform, tamias2d.Poly.create_box(platform, (60, 10)))
+    box(300, 56)
+
+    def hook(i):
+        if i == 150:
+            box(-285, 120)
+    s.scene_hook = hook
+    return s
+
+
 # The scenes the same-bits tests below run with a switch off and on.
 _SWITCH_SCENES = {"sleepy_pile": _sleepy_pile, "sleepy_pyramid": _sleepy_pyramid,
+                  "sleepy_joints": _sleepy_joints,
                   "static_changes": _static_changes,
                   "rain_persistence_1": lambda: _short_memory_rain(1),
                   "rain_persistence_0": lambda: _short_memory_rain(0)}
@@ -1497,7 +1535,7 @@ def test_skipping_the_idle_arbiter_filter_changes_nothing(scene, solver):
 
 @pytest.mark.parametrize("scene", ["pyramid", "add_remove", "type_changes", "static_changes",
                                    "rain_persistence_1", "rain_persistence_0", "sleepy_pile",
-                                   "sleepy_pyramid"])
+                                   "sleepy_pyramid", "sleepy_joints"])
 def test_arbiters_left_threaded_change_nothing(scene):
     # Where nothing can look at the bodies' arbiter lists during the
     # collision, a soft step leaves last step's arbiters threaded and
@@ -1547,6 +1585,43 @@ def test_arbiters_left_threaded_change_nothing(scene):
         assert _soft_step._kept_threads_count() > kept, "no step kept its threads: nothing tested"
     assert lists == lists_munk2d
     assert repr(bodies) == repr(bodies_munk2d)
+
+
+@pytest.mark.parametrize("scene", ["sleepy_pile", "sleepy_pyramid", "sleepy_joints"])
+def test_linked_sleeping_components_change_nothing(scene):
+    # With sleeping on and nothing asleep, a soft step finds the components
+    # by union-find over the step's arbiters and the joints, and skips
+    # Munk2D's flood fill where every component has a body that is not
+    # idle: the same bodies must fall asleep at the same steps, with the
+    # same bits.
+    from tamias2d import _soft_step
+    build = _switch_scene(scene)
+
+    def run():
+        s = build()
+        s.solver = "soft"
+        hook = getattr(s, "scene_hook", None)
+        asleep = []
+        for i in range(240):
+            if hook is not None:
+                hook(i)
+            s.step(DT)
+            asleep.append(tuple(b.is_sleeping for b in s.bodies))
+        return asleep, [(tuple(b.position), b.angle, tuple(b.velocity)) for b in s.bodies]
+
+    assert _soft_step._link_sleeping_components()
+    try:
+        _soft_step._link_sleeping_components(False)
+        linked = _soft_step._linked_components_count()
+        asleep_filled, bodies_filled = run()
+        assert _soft_step._linked_components_count() == linked
+    finally:
+        _soft_step._link_sleeping_components(True)
+    asleep, bodies = run()
+    assert _soft_step._linked_components_count() > linked, "no step skipped the flood fill"
+    assert any(any(step) for step in asleep), "nothing fell asleep: nothing tested"
+    assert asleep == asleep_filled
+    assert repr(bodies) == repr(bodies_filled)
 
 
 @pytest.mark.parametrize("scene", ["pyramid", "mixed", "rain"])

@@ -149,6 +149,7 @@ cdef enum:
     SOFT_SCRATCH_PAIR_ARBITERS  # each updated pair's arbiter, packed (SoftCollide)
     SOFT_SCRATCH_BLOCKS       # the light bodies and their contacts (SoftFindBlocks)
     SOFT_SCRATCH_BLOCK_CACHE  # each block's matrix and factors for the step (SoftBlockCache)
+    SOFT_SCRATCH_COMPONENTS   # the sleeping components' union-find (cpSpaceProcessComponents)
     SOFT_SCRATCH_COUNT
 
 # (cpSoftScratch holds 24 buffers.)
@@ -413,6 +414,10 @@ cdef volatile long _overflow_total = 0
 cdef bint _keep_threads = 1
 cdef bint _use_blocks = 1
 cdef volatile long _kept_threads = 0
+# The same for the components found by union-find instead of the flood fill
+# (SoftProcessComponents).
+cdef bint _link_components = 1
+cdef volatile long _linked_components = 0
 
 cdef inline bint SoftGuessHolds(const cpArbiter *arb, const cpCollisionInfo *info) noexcept nogil:
     # The guess is the pair's cached arbiter: in the cache and of these two
@@ -908,7 +913,12 @@ cdef void SoftProcessComponents(SoftContext *ctx, cpFloat dt, int collided) noex
     # step may keep them (SoftResetArbiters). Waking or putting a body to
     # sleep in between resets the mark (cpSpaceActivateBody and the like).
     cdef cpSpace *space = ctx.space
-    cpSpaceProcessComponents(space, dt, collided, SoftRethreadArbiters(ctx, collided))
+    cdef int *links = NULL
+    if ctx.threadsEmptied and _link_components:
+        links = <int *>_reserve(space, SOFT_SCRATCH_COMPONENTS, 2 * space.dynamicBodies.num + 2,
+                                sizeof(int))
+    if cpSpaceProcessComponents(space, dt, collided, SoftRethreadArbiters(ctx, collided), links):
+        tamias_add(&_linked_components, 1)
     if not (ctx.threadsEmptied and space.softScratch.threadsClean == space.stamp
             and space.sleepingComponents.num == 0 and space.arbiters.num == collided):
         space.softScratch.threadsClean = 0
@@ -3241,6 +3251,19 @@ def _mass_ratio_blocks(on=None):
     if on is not None:
         _use_blocks = bool(on)
     return bool(_use_blocks)
+
+def _link_sleeping_components(on=None):
+    """Whether a soft step with sleeping on may tell by union-find that no
+    component would fall asleep, and skip the flood fill (and, given `on`,
+    set it first; for tests, which check that it changes nothing)."""
+    global _link_components
+    if on is not None:
+        _link_components = bool(on)
+    return bool(_link_components)
+
+def _linked_components_count():
+    """Steps so far (all spaces) that skipped the flood fill."""
+    return tamias_load(&_linked_components)
 
 def _kept_threads_count():
     """Steps so far (all spaces) whose arbiters were left threaded."""

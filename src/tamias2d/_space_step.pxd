@@ -76,9 +76,12 @@ cdef void cpSpaceDeactivateBody(cpSpace *space, cpBody *body) noexcept nogil
 cdef void cpSpaceWakeComponent(cpSpace *space, cpBody *root) noexcept nogil
 # Threads this step's first `count` arbiters into the contact graph (unless
 # `threaded`: they are already), wakes what they touch, updates idle times
-# and puts idle components to sleep.
-cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count,
-                                   bint threaded) noexcept nogil
+# and puts idle components to sleep. `links` (NULL, or room for twice
+# space.dynamicBodies.num + 2 ints) lets it skip the flood fill where it
+# can tell that no component would sleep (the soft step; it overwrites the
+# bodies' solverIndex), and returns whether it did.
+cdef bint cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count, bint threaded,
+                                   int *links) noexcept nogil
 
 # A dynamic body removed from the space while its shapes stayed (pymunk
 # allows it). The space no longer integrates it, so, like a kinematic body, it

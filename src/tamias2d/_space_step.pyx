@@ -13,7 +13,7 @@ from libc.math cimport INFINITY, pow, sqrt, fmax
 from libc.string cimport memcpy
 
 from tamias2d._config cimport (cpFloat, cpBool, cpHashValue, cpCollisionID, cpTimestamp,
-    CP_HASH_PAIR, CP_MAX_CONTACTS_PER_ARBITER, CP_BUFFER_BYTES)
+    CP_HASH_PAIR, CP_MAX_CONTACTS_PER_ARBITER, CP_BUFFER_BYTES, tamias_prefetch)
 from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, cpArray, cpCollisionHandler,
     cpCollisionInfo, cpContactBufferHeader, cpPostStepCallback, cpPostStepFunc,
     cpConstraint, cpBodyType, cpSpatialIndex,
@@ -406,7 +406,7 @@ cdef void cpSpaceStep(cpSpace *space, cpFloat dt) noexcept nogil:
     collided = space.arbiters.num
     cpSpaceUnlock(space, 0)
 
-    cpSpaceProcessComponents(space, dt, collided, 0)
+    cpSpaceProcessComponents(space, dt, collided, 0, NULL)
 
     cpSpaceLock(space)
     StageFilterArbiterCache(space)
@@ -769,14 +769,89 @@ cdef inline cpBool ComponentActive(cpBody *root, cpFloat threshold) noexcept nog
         body = body.sleeping.next
     return 0
 
-cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count,
-                                   bint threaded) noexcept nogil:
+cdef inline void _fetchSleepLines(const cpBody *body) noexcept nogil:
+    # The lines of a body that the components stage reads (besides its
+    # velocity): its mass, its space, sleeping links, idle time and
+    # solverIndex.
+    tamias_prefetch(&body.m)
+    tamias_prefetch(&body.sleeping.root)
+    tamias_prefetch(&body.solverIndex)
+
+# The soft step's shortcut past the flood fill (cpSpaceProcessComponents with
+# a `links` array): the components found by union-find over the step's
+# arbiter array and the bodies' joints, with each body's slot in
+# space.dynamicBodies (+ 1) in its solverIndex. Only where the flood fill
+# would see the same graph: every body awake and in the space, the bodies'
+# arbiter lists exactly the array (cpSoftScratch.threadsClean).
+cdef inline int _linkRoot(int *parent, int i) noexcept nogil:
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+cdef inline int _linkSlot(cpSpace *space, const cpBody *body, int n) noexcept nogil:
+    # body's slot, or 0 if it is not one of the first n dynamic bodies.
+    cdef int i = body.solverIndex
+    if 0 < i <= n and space.dynamicBodies.arr[i - 1] == body:
+        return i
+    return 0
+
+cdef inline bint _linkBodies(cpSpace *space, int *parent, const cpBody *a, const cpBody *b,
+                             int n) noexcept nogil:
+    # Joins a's and b's components where the flood fill would cross from one
+    # to the other (both dynamic); 0 if one of them has no slot.
+    cdef int ia, ib
+    if cpBodyGetType(a) != CP_BODY_TYPE_DYNAMIC or cpBodyGetType(b) != CP_BODY_TYPE_DYNAMIC:
+        return 1
+    ia = _linkSlot(space, a, n)
+    ib = _linkSlot(space, b, n)
+    if ia == 0 or ib == 0:
+        return 0
+    ia = _linkRoot(parent, ia)
+    ib = _linkRoot(parent, ib)
+    if ia < ib:
+        parent[ib] = ia
+    elif ib < ia:
+        parent[ia] = ib
+    return 1
+
+cdef bint _everyComponentActive(cpSpace *space, int *parent, int n) noexcept nogil:
+    # With the arbiters linked: links the joints, then tells whether every
+    # component has a body whose idle time is under the threshold (0 also
+    # where a joint leads out of the first n dynamic bodies).
+    cdef int *restless = parent + n + 1
+    cdef cpBody *body
+    cdef cpConstraint *constraint
+    cdef int i
+    for i in range(1, n + 1):
+        if i + 4 <= n:
+            _fetchSleepLines(<cpBody *>space.dynamicBodies.arr[i + 3])
+        body = <cpBody *>space.dynamicBodies.arr[i - 1]
+        # (Kinematic bodies never sleep nor join a component.)
+        restless[i] = (cpBodyGetType(body) != CP_BODY_TYPE_DYNAMIC
+                       or body.sleeping.idleTime < space.sleepTimeThreshold)
+        constraint = body.constraintList
+        while constraint != NULL:
+            if not _linkBodies(space, parent, constraint.a, constraint.b, n):
+                return 0
+            constraint = cpConstraintNext(constraint, body)
+    for i in range(1, n + 1):
+        if restless[i]:
+            restless[_linkRoot(parent, i)] = 1
+    for i in range(1, n + 1):
+        if parent[i] == i and not restless[i]:
+            return 0
+    return 1
+
+cdef bint cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count, bint threaded,
+                                   int *links) noexcept nogil:
     cdef cpBool sleep = space.sleepTimeThreshold != INFINITY
     cdef cpArray *bodies = space.dynamicBodies
     cdef cpArray *arbiters
     cdef cpArray *constraints
     cdef cpFloat dv, dvsq, keThreshold
     cdef int i, outside
+    cdef int linked = bodies.num
     cdef cpBody *body
     cdef cpBody *a
     cdef cpBody *b
@@ -791,7 +866,15 @@ cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count,
         dvsq = dv * dv if dv != 0.0 else cpvlengthsq(space.gravity) * dt * dt
         # Update idle times.
         for i in range(bodies.num):
+            if i + 4 < bodies.num:
+                # (Bodies are scattered in memory: a few cache misses each
+                # otherwise. Fetching changes no result.)
+                _fetchSleepLines(<cpBody *>bodies.arr[i + 4])
+                tamias_prefetch(&(<cpBody *>bodies.arr[i + 4]).v)
             body = <cpBody *>bodies.arr[i]
+            if links != NULL:
+                body.solverIndex = i + 1
+                links[i + 1] = i + 1
             if cpBodyGetType(body) != CP_BODY_TYPE_DYNAMIC:
                 continue
             keThreshold = body.m * dvsq if dvsq != 0.0 else 0.0
@@ -804,6 +887,14 @@ cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count,
     arbiters = space.arbiters
     if sleep or not threaded:
         for i in range(count):
+            if sleep and i + 16 < count:
+                # What the waking reads of the arbiters and their bodies,
+                # fetched ahead (both are scattered in memory).
+                tamias_prefetch(&(<cpArbiter *>arbiters.arr[i + 16]).body_a)
+            if sleep and i + 8 < count:
+                arb = <cpArbiter *>arbiters.arr[i + 8]
+                _fetchSleepLines(arb.body_a)
+                _fetchSleepLines(arb.body_b)
             arb = <cpArbiter *>arbiters.arr[i]
             a = arb.body_a
             b = arb.body_b
@@ -814,6 +905,8 @@ cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count,
                 if (cpBodyGetType(a) == CP_BODY_TYPE_KINEMATIC or cpBodyIsSleeping(b)
                         or _orphanBody(a, space)):
                     cpBodyActivate(b)
+                if links != NULL and not _linkBodies(space, links, a, b, linked):
+                    links = NULL
             if not threaded:
                 cpArbiterPushThreads(arb)
 
@@ -834,6 +927,11 @@ cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count,
         if holdAwake:
             # After all the waking above, which restarts idle times at 0.
             _holdAwakeTouching(space, count)
+        elif (links != NULL and space.softScratch.threadsClean == space.stamp
+                and _everyComponentActive(space, links, linked)):
+            # Nothing sleeps, nothing woke, and the lists are the array's: the
+            # flood fill would find every component active and change nothing.
+            return 1
 
         # Build the components and put the idle ones to sleep.
         i = 0
@@ -861,6 +959,7 @@ cdef void cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count,
             body.sleeping.next = NULL
             if body.sleeping.idleTime < 0.0:
                 body.sleeping.idleTime = 0.0    # the _holdAwake mark, spent
+    return 0
 
 
 
