@@ -76,6 +76,13 @@ cdef const cpFloat SOFT_RESTING_FRACTION = 1e-3
 # its (filtered) load at no depth (SoftPreload) in a chain, where both bodies
 # have at most two contacts (stacks, arches, a box on a box) ...
 cdef const cpFloat SOFT_PRELOAD_CHAIN = 1.0
+# ... where a chain's contact has two points, their preloads keep this much
+# of the difference between the two points' loads (SoftPrepareContact). Each
+# point's preload follows its own load, which makes it an integral action on
+# the box's tilt, and that, lagging, rocked stacks that did not stand exactly
+# on centre: a 10-box stack with its boxes 0.1% of a box off centre rocked
+# itself over. The mean load, which holds the weight, is kept whole.
+cdef const cpFloat SOFT_PRELOAD_TILT = 0.75
 # ... and this fraction in a web of contacts (a pyramid's), whose loads are
 # not fixed by the bodies' weights: with all of it there the loads wander
 # from contact to contact and a 40-row pyramid never comes to rest ...

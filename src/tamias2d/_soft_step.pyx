@@ -413,6 +413,8 @@ cdef volatile long _overflow_total = 0
 # The same for the bodies' arbiter lists (SoftResetArbiters).
 cdef bint _keep_threads = 1
 cdef bint _use_blocks = 1
+# SOFT_PRELOAD_TILT, but for tests and benchmarks (_chain_preload_tilt).
+cdef cpFloat _preload_tilt = SOFT_PRELOAD_TILT
 cdef volatile long _kept_threads = 0
 # The same for the components found by union-find instead of the flood fill
 # (SoftProcessComponents).
@@ -1476,7 +1478,7 @@ cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept 
     cdef SoftBody *b
     cdef SoftSoftness soft
     cdef cpFloat nx, ny, rnA, rnB, rtA, rtB, kN, kT, sep, warm, size, load
-    cdef cpFloat maxStiffening, preloadFraction, age, smoothing, least
+    cdef cpFloat maxStiffening, preloadFraction, age, smoothing, least, mean
     cdef cpVect pa, pb
     cdef const cpFloat *compliance
     cdef SoftState *sa
@@ -1574,6 +1576,11 @@ cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept 
         con.bias = age + 1.0
         con.jBias = load
         con.bounce = sp.relativeVelocity * arb.e
+    if sc.count == 2 and preloadFraction == SOFT_PRELOAD_CHAIN and _preload_tilt != 1.0:
+        # (SOFT_PRELOAD_TILT.)
+        mean = 0.5 * (sc.p[0].preload + sc.p[1].preload)
+        sc.p[0].preload = mean + _preload_tilt * (sc.p[0].preload - mean)
+        sc.p[1].preload = mean + _preload_tilt * (sc.p[1].preload - mean)
 
 # Above this condition number the two normal rows are nearly dependent (the
 # points almost coincide) and are solved as one row at their midpoint
@@ -3264,6 +3271,18 @@ def _link_sleeping_components(on=None):
 def _linked_components_count():
     """Steps so far (all spaces) that skipped the flood fill."""
     return tamias_load(&_linked_components)
+
+def _chain_preload_tilt(share=None):
+    """How much of the difference between a two-point chain contact's point
+    loads its preloads keep (SOFT_PRELOAD_TILT; and, given `share`, set it
+    first; for tests and benchmarks/offset_stacks.py, which compare with 1,
+    each point's own load, as before)."""
+    global _preload_tilt
+    if share is not None:
+        if not 0.0 <= share <= 1.0:
+            raise ValueError("share must be within [0, 1]")
+        _preload_tilt = share
+    return _preload_tilt
 
 def _kept_threads_count():
     """Steps so far (all spaces) whose arbiters were left threaded."""
