@@ -82,7 +82,7 @@ cdef const cpFloat SOFT_PRELOAD_CHAIN = 1.0
 # the box's tilt, and that, lagging, rocked stacks that did not stand exactly
 # on centre: a 10-box stack with its boxes 0.1% of a box off centre rocked
 # itself over. The mean load, which holds the weight, is kept whole.
-cdef const cpFloat SOFT_PRELOAD_TILT = 0.75
+cdef const cpFloat SOFT_PRELOAD_TILT = 0.5
 # ... and this fraction in a web of contacts (a pyramid's), whose loads are
 # not fixed by the bodies' weights: with all of it there the loads wander
 # from contact to contact and a 40-row pyramid never comes to rest ...
