@@ -382,6 +382,35 @@ def test_persistence_0_then_sleep_a_touching_body():
     copy.deepcopy(s)
 
 
+@pytest.mark.parametrize("solver", ["chipmunk", "soft"])
+def test_a_body_put_to_sleep_under_another_can_be_copied(solver):
+    # body.sleep() on a box with another box on it takes their arbiter out of
+    # the contact graph, but left it in the step's arbiter array: copies of
+    # the space were refused as corrupt ("names arbiter 0, whose bodies
+    # sleep") until the next step. pymunk aborts here (munmap_chunk) once
+    # stepped. The copy must continue as the original does.
+    s = Space(solver=solver)
+    s.gravity = 0, -300
+    s.sleep_time_threshold = 0.5
+    s.add(Segment(s.static_body, (-100, 0), (100, 0), 1))
+    lower, upper = Body(1, 10), Body(1, 10)
+    lower.position, upper.position = (0, 6), (0, 16)
+    s.add(lower, Poly.create_box(lower, (10, 10)), upper, Poly.create_box(upper, (10, 10)))
+    for _ in range(5):
+        s.step(DT)
+    lower.sleep()
+    assert s._contact_graph_problem() is None
+    for clone in (s.copy(), copy.deepcopy(s), pickle.loads(pickle.dumps(s))):
+        for _ in range(120):
+            clone.step(DT)
+        sound(clone)
+    for _ in range(120):
+        s.step(DT)
+    sound(s)
+    assert [(tuple(b.position), b.is_sleeping) for b in s.bodies] == \
+        [(tuple(b.position), b.is_sleeping) for b in clone.bodies]
+
+
 # -- the overflow check of the step ----------------------------------------------------------
 # It looked at the awake body array only; static bodies and joints' bodies
 # outside the space went NaN silently, and the space could not be brought

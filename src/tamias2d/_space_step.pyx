@@ -1049,6 +1049,12 @@ cdef void _hookSleepWithGroup(cpBody *body, cpBody *group) noexcept nogil:
             if cpBodyIsSleeping(other):
                 cpBodyActivate(other)
             cpArbiterUnthread(arb)
+            if cpArrayContains(space.arbiters, arb):
+                # Out of the contact graph, so out of the step's array too (a
+                # copy of the space checks one against the other), in the
+                # state the next step would have given it there.
+                cpArrayDeleteObj(space.arbiters, arb)
+                arb.state = CP_ARBITER_STATE_NORMAL
         arb = next_arb
     cpSpaceDeactivateBody(space, body)
     if group != NULL:
