@@ -654,6 +654,10 @@ cdef void SoftSetReach(cpSpace *space) noexcept nogil:
         if v2 > fastest:
             fastest = v2
     travel = sqrt(fastest) * space.curr_dt
+    if not travel < INFINITY:
+        # (A non-finite speed: the step refuses it after the integration,
+        # and the space must stay copyable, its reach finite.)
+        return
     reach = cpBBTreeGetStaticReach(space.dynamicShapes)
     if travel > reach or (SOFT_REACH_SHRINK * travel < reach and reach > space.collideMargin):
         cpBBTreeSetStaticReach(space.dynamicShapes,
