@@ -2505,12 +2505,16 @@ cdef class Space:
                 prev = arb
                 arb = cpArbiterNext(arb, body)
             if cpBodyIsSleeping(body):
+                # (A component may hold bodies that are in no array and have
+                # no shape in an index: shapeless sleeping bodies, bodies
+                # outside the space held by a joint. So a loop is a member
+                # met twice, not more members than the bodies found.)
                 member = body.sleeping.root
-                n = 0
+                members = set()
                 while member != NULL:
-                    n += 1
-                    if n > len(found) + 1:  # more members than bodies
+                    if <uintptr_t>member in members:
                         return f"{name}'s sleeping component loops"
+                    members.add(<uintptr_t>member)
                     member = member.sleeping.next
         return None
 
