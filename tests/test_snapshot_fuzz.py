@@ -245,7 +245,33 @@ def outside_bodies():
     return space
 
 
+def soft_pile():
+    """The soft solver: a stack asleep; a pyramid settled, its contacts'
+    loads learnt; a pinned pair swinging and a bullet in flight."""
+    space = tamias2d.Space(solver="soft")
+    space.gravity = 0, -600
+    space.sleep_time_threshold = 0.3
+    _floor(space)
+    for i in range(3):
+        _box(space, 2, 14, 10, (200, 5 + 10 * i))
+    _run(space, 100)
+    space.sleep_time_threshold = 5.0
+    for row in range(5):
+        for j in range(5 - row):
+            _box(space, 1, 12, 12, (-150 + 13 * j + 6.5 * row, 6 + 12 * row))
+    a = _ball(space, 1, 5, (60, 80))
+    b = _ball(space, 1, 5, (90, 80))
+    space.add(tamias2d.PivotJoint(space.static_body, a, (60, 80)), tamias2d.PinJoint(a, b))
+    _run(space, 80)
+    bullet = _ball(space, 0.2, 2, (-300, 100))
+    bullet.is_bullet = True
+    bullet.velocity = 900, 0
+    _run(space, 5)
+    return space
+
+
 SCENES = {
+    "soft_pile": soft_pile,
     "sleeping_pile": sleeping_pile,
     "joints": joints,
     "spatial_hash": spatial_hash,
