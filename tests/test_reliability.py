@@ -460,6 +460,43 @@ def test_a_static_body_that_overflows_is_named():
     assert all(finite(b) for b in [*s.bodies, s.static_body])
 
 
+@pytest.mark.parametrize("solver", ["chipmunk", "soft"])
+def test_an_overflow_and_a_raising_callback_in_one_step(solver):
+    # The step both overflowed and had a callback raise: the callback's error
+    # surfaced and hid the overflow, so a caller resetting the bodies an
+    # IllegalBody names never saw them (the fuzzer's sleeping mode, seed
+    # 1919, was left with a NaN body). The overflow is raised, the callback's
+    # error as its context.
+    class Boom(Exception):
+        pass
+
+    def boom(space, key):
+        raise Boom("callback")
+    s = Space(solver=solver)
+    a, b = Body(1, 1), Body(1, 1)      # b outside the space, held by the joint
+    a.velocity = (1e300, 0)
+    b.position = (10, 0)
+    s.add(a, PinJoint(a, b))
+    caught = None
+    for _ in range(5):
+        s.add_post_step_callback(boom, "boom")     # raises after every step
+        try:
+            s.step(DT)
+        except Boom:
+            continue
+        except IllegalBody as e:
+            caught = e
+            break
+    assert caught is not None and "overflowed" in str(caught)
+    assert isinstance(caught.__context__, Boom)
+    assert caught.bodies and not all(finite(b) for b in caught.bodies)
+    reset(caught.bodies)
+    a.position, b.position = (0, 0), (10, 0)
+    for _ in range(30):
+        s.step(DT)
+    assert finite(a) and finite(b)
+
+
 def test_a_static_body_in_the_space_that_overflows_is_named():
     s = Space()
     ground = Body(body_type=Body.STATIC)

@@ -1967,6 +1967,7 @@ cdef class Space:
         return self._space.constraints.num == 0 or tamias_constraints_ok(&self._space)
 
     cdef int _step_finish(self, cpBody *bad, double dt) except -1:
+        cdef object overflow = None
         self._locked = False
         tamias_end_step(&self._space)
         try:
@@ -1977,9 +1978,23 @@ cdef class Space:
                 bad = self._first_non_finite()
             if bad != NULL:
                 self._overflowed = True
-                self._raise_non_finite(bad, dt)
+                try:
+                    self._raise_non_finite(bad, dt)
+                except IllegalBody as e:
+                    overflow = e
         finally:
-            self._after_step()
+            if overflow is None:
+                self._after_step()
+        if overflow is not None:
+            # An overflow and a callback's error in one step: the overflow is
+            # raised (the space refuses to step until the bodies it names are
+            # reset, which a caller catching it does), the callback's error
+            # as its context.
+            try:
+                self._after_step()
+            except BaseException as late:
+                overflow.__context__ = late
+            raise overflow
         return 0
 
     cdef _after_step(self):
