@@ -843,7 +843,7 @@ cdef void SoftResetArbiters(SoftContext *ctx) noexcept nogil:
     # Last step's arbiters are left threaded until the narrow phase has
     # found this step's (SoftRethreadArbiters), where nothing can look at
     # the lists meanwhile. With sleeping on, only after a step whose lists
-    # were exactly its arrays's, threaded in order, with nothing asleep
+    # were exactly its array's, threaded in order, with nothing asleep
     # (cpSoftScratch.threadsClean): the flood fill follows the lists'
     # order, so they are kept only when re-threading would give the same.
     cdef cpSpace *space = ctx.space
