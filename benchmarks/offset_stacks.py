@@ -37,10 +37,9 @@ GRAVITIES = (10.0, 22.5, 45.0)     # box sizes per s^2
 COUNTS = (10, 20, 40)
 
 
-def soft_stack(count, offset, gravity, seed):
-    """The largest sideways move of any box, in boxes, of a stack built up to
-    `offset` boxes off centre."""
-    rng = random.Random(seed)
+def _soft_column(count, gravity, offsets):
+    """A soft-solver space with a column of `count` boxes on a static floor,
+    box i `offsets[i]` boxes to the side."""
     space = tamias2d.Space(solver="soft")
     space.gravity = 0, -gravity * SIZE
     ground = tamias2d.Segment(space.static_body, (-2000, -5), (2000, -5), 5)
@@ -49,12 +48,17 @@ def soft_stack(count, offset, gravity, seed):
     boxes = []
     for i in range(count):
         body = tamias2d.Body(1, tamias2d.moment_for_box(1, (SIZE, SIZE)))
-        body.position = rng.uniform(-offset, offset) * SIZE, SIZE / 2 + i * SIZE
+        body.position = offsets[i] * SIZE, SIZE / 2 + i * SIZE
         box = tamias2d.Poly.create_box(body, (SIZE, SIZE))
         box.friction = 0.6
         space.add(body, box)
         boxes.append(body)
-    home = [b.position.x for b in boxes]
+    return space, boxes
+
+
+def _largest_move(space, boxes, home):
+    """Steps STEPS times; the largest sideways move of any box from `home`,
+    in boxes."""
     moved = 0.0
     for _ in range(STEPS):
         space.step(1 / 60)
@@ -62,30 +66,22 @@ def soft_stack(count, offset, gravity, seed):
     return moved / SIZE
 
 
+def soft_stack(count, offset, gravity, seed):
+    """The largest sideways move of any box, in boxes, of a stack built up to
+    `offset` boxes off centre."""
+    rng = random.Random(seed)
+    space, boxes = _soft_column(count, gravity, [rng.uniform(-offset, offset) for _ in range(count)])
+    return _largest_move(space, boxes, [b.position.x for b in boxes])
+
+
 def soft_nudged(count, nudge, gravity):
     """The largest sideways move of any box, in boxes, after the settled
     stack's top box is moved `nudge` boxes to the side."""
-    space = tamias2d.Space(solver="soft")
-    space.gravity = 0, -gravity * SIZE
-    ground = tamias2d.Segment(space.static_body, (-2000, -5), (2000, -5), 5)
-    ground.friction = 0.6
-    space.add(ground)
-    boxes = []
-    for i in range(count):
-        body = tamias2d.Body(1, tamias2d.moment_for_box(1, (SIZE, SIZE)))
-        body.position = 0, SIZE / 2 + i * SIZE
-        box = tamias2d.Poly.create_box(body, (SIZE, SIZE))
-        box.friction = 0.6
-        space.add(body, box)
-        boxes.append(body)
+    space, boxes = _soft_column(count, gravity, [0.0] * count)
     for _ in range(STEPS):
         space.step(1 / 60)
     boxes[-1].position = boxes[-1].position + (nudge * SIZE, 0)
-    moved = 0.0
-    for _ in range(STEPS):
-        space.step(1 / 60)
-        moved = max(moved, max(abs(b.position.x) for b in boxes))
-    return moved / SIZE
+    return _largest_move(space, boxes, [0.0] * count)
 
 
 def box2d_stack(b2, count, offset, gravity, seed):

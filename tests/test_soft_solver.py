@@ -1312,15 +1312,21 @@ def test_an_unknown_kernel_path_is_refused():
 
 # -- the broad phase's arbiter guesses --------------------------------------------------
 
-def _sleepy_pile():
-    # Boxes that fall asleep, are woken by a late box and fall asleep again:
-    # arbiters leave the cache for the sleeping components and come back.
+def _sleepy_space(half_width):
+    # Gravity, sleeping after 0.3 s idle, a floor of friction 0.8.
     s = tamias2d.Space()
     s.gravity = 0, -900
     s.sleep_time_threshold = 0.3
-    ground = tamias2d.Segment(s.static_body, (-300, 0), (300, 0), 2)
+    ground = tamias2d.Segment(s.static_body, (-half_width, 0), (half_width, 0), 2)
     ground.friction = 0.8
     s.add(ground)
+    return s
+
+
+def _sleepy_pile():
+    # Boxes that fall asleep, are woken by a late box and fall asleep again:
+    # arbiters leave the cache for the sleeping components and come back.
+    s = _sleepy_space(300)
     for i in range(12):
         b = tamias2d.Body(1, tamias2d.moment_for_box(1, (20, 20)))
         b.position = -150 + 26 * i, 11 + (i % 3) * 21
@@ -1438,12 +1444,7 @@ def _sleepy_joints():
     # (one component each, through the joint), a pendulum that keeps
     # swinging, a box carried by a moving kinematic platform (kept awake by
     # it) and a loose box dropped on the first pair late.
-    s = tamias2d.Space()
-    s.gravity = 0, -900
-    s.sleep_time_threshold = 0.3
-    ground = tamias2d.Segment(s.static_body, (-400, 0), (400, 0), 2)
-    ground.friction = 0.8
-    s.add(ground)
+    s = _sleepy_space(400)
 
     def box(x, y, mass=1.0):
         b = tamias2d.Body(mass, tamias2d.moment_for_box(mass, (20, 20)))
@@ -1555,6 +1556,23 @@ def test_skipping_the_idle_arbiter_filter_changes_nothing(scene, solver):
     assert repr(bodies) == repr(bodies_filtered)
 
 
+def _off_and_on(switch, count, run):
+    # run() with one of _soft_step's test switches off (its counter must not
+    # move) and then on: both results, and how far the counter moved with
+    # the switch on.
+    assert switch()
+    try:
+        switch(False)
+        before = count()
+        off = run()
+        assert count() == before
+    finally:
+        switch(True)
+    before = count()
+    on = run()
+    return off, on, count() - before
+
+
 @pytest.mark.parametrize("scene", ["pyramid", "add_remove", "type_changes", "static_changes",
                                    "rain_persistence_1", "rain_persistence_0", "sleepy_pile",
                                    "sleepy_pyramid", "sleepy_joints"])
@@ -1593,18 +1611,10 @@ def test_arbiters_left_threaded_change_nothing(scene):
                     seen.append((i, sorted(arbs)))
         return seen, [(tuple(b.position), b.angle, tuple(b.velocity)) for b in s.bodies]
 
-    assert _soft_step._keep_arbiter_threads()
-    try:
-        _soft_step._keep_arbiter_threads(False)
-        kept = _soft_step._kept_threads_count()
-        lists_munk2d, bodies_munk2d = run()
-        assert _soft_step._kept_threads_count() == kept
-    finally:
-        _soft_step._keep_arbiter_threads(True)
-    kept = _soft_step._kept_threads_count()
-    lists, bodies = run()
+    (lists_munk2d, bodies_munk2d), (lists, bodies), kept = _off_and_on(
+        _soft_step._keep_arbiter_threads, _soft_step._kept_threads_count, run)
     if scene in ("pyramid", "static_changes", "sleepy_pile", "sleepy_pyramid"):
-        assert _soft_step._kept_threads_count() > kept, "no step kept its threads: nothing tested"
+        assert kept > 0, "no step kept its threads: nothing tested"
     assert lists == lists_munk2d
     assert repr(bodies) == repr(bodies_munk2d)
 
@@ -1631,16 +1641,9 @@ def test_linked_sleeping_components_change_nothing(scene):
             asleep.append(tuple(b.is_sleeping for b in s.bodies))
         return asleep, [(tuple(b.position), b.angle, tuple(b.velocity)) for b in s.bodies]
 
-    assert _soft_step._link_sleeping_components()
-    try:
-        _soft_step._link_sleeping_components(False)
-        linked = _soft_step._linked_components_count()
-        asleep_filled, bodies_filled = run()
-        assert _soft_step._linked_components_count() == linked
-    finally:
-        _soft_step._link_sleeping_components(True)
-    asleep, bodies = run()
-    assert _soft_step._linked_components_count() > linked, "no step skipped the flood fill"
+    (asleep_filled, bodies_filled), (asleep, bodies), linked = _off_and_on(
+        _soft_step._link_sleeping_components, _soft_step._linked_components_count, run)
+    assert linked > 0, "no step skipped the flood fill"
     assert any(any(step) for step in asleep), "nothing fell asleep: nothing tested"
     assert asleep == asleep_filled
     assert repr(bodies) == repr(bodies_filled)
