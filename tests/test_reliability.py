@@ -382,6 +382,42 @@ def test_persistence_0_then_sleep_a_touching_body():
     copy.deepcopy(s)
 
 
+@isolated(timeout=60)
+def test_a_body_outside_the_space_is_no_sleeping_group():
+    # A body outside the space, held by a joint to a body that fell asleep,
+    # reads as asleep (its root names itself) but sleeps in no component.
+    # sleep_with_group() took it as the group: the body joined a component
+    # rooted outside the space, and waking it through that root read the
+    # root's NULL space (a segfault when the space was freed, or when a
+    # joint added to the outside body woke it; the sleeping fuzzer, seed
+    # 2085). It is refused now, and the space goes on.
+    s = Space()
+    s.gravity = 0, -100
+    s.sleep_time_threshold = 0.5
+    s.add(Segment(s.static_body, (-100, 0), (100, 0), 1))
+    a = Body(1, 10)
+    a.position = 0, 2
+    s.add(a, Circle(a, 1))
+    outside = Body(1, 10)
+    outside.position = 0, 5
+    s.add(PivotJoint(a, outside, (0, 3)))
+    for _ in range(120):
+        s.step(DT)
+    assert a.is_sleeping and outside.is_sleeping
+    c = Body(1, 10)
+    c.position = 50, 2
+    s.add(c, Circle(c, 1))
+    s.step(DT)
+    with pytest.raises(IllegalBody, match="asleep in this body's space"):
+        c.sleep_with_group(outside)
+    c.sleep_with_group(a)                   # a group that sleeps here is fine
+    s.add(tamias2d.RotaryLimitJoint(outside, s.static_body, -1, 1))
+    for _ in range(10):
+        s.step(DT)
+        sound(s)
+    copy.deepcopy(s)
+
+
 @pytest.mark.parametrize("solver", ["chipmunk", "soft"])
 def test_a_body_put_to_sleep_under_another_can_be_copied(solver):
     # body.sleep() on a box with another box on it takes their arbiter out of

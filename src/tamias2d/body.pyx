@@ -611,6 +611,13 @@ cdef int _check_can_sleep(Body self, Body group) except -1:
         if not cpBodyIsSleeping(&group._body):
             raise IllegalBody("Cannot use a non-sleeping body as a group identifier.")
         group_root = group._body.sleeping.root
+        if group._body.space != space or not cpArrayContains(space.sleepingComponents, group_root):
+            # A body outside the space, held there by a joint, keeps a root
+            # naming itself (it reads as asleep) but sleeps in no component
+            # of any space: a group rooted there was woken through a root
+            # with no space (a segfault), and one in another space would
+            # link the two spaces' bodies.
+            raise IllegalBody("The group must be a body asleep in this body's space.")
     if cpBodyIsSleeping(&self._body) and self._body.sleeping.root != group_root:
         raise IllegalBody("The body is already sleeping and its group cannot be reassigned.")
     if _hooks.sleep_with_group == NULL:
