@@ -761,6 +761,17 @@ cdef void _holdAwakeTouching(cpSpace *space, int threadCount) noexcept nogil:
         if cpBodyGetType(a) == CP_BODY_TYPE_KINEMATIC and a.space == space:
             _holdAwake(b, space)
 
+cdef cpBool _componentNonFinite(cpBody *root) noexcept nogil:
+    # A component with a non-finite body stays awake, where the step's
+    # overflow check sees it (a NaN speed reads as idle, and at a threshold
+    # of 0 everything sleeps: the body slept, unnamed, with its NaN).
+    cdef cpBody *body = root
+    while body != NULL:
+        if _bodyNonFinite(body):
+            return 1
+        body = body.sleeping.next
+    return 0
+
 cdef inline cpBool ComponentActive(cpBody *root, cpFloat threshold) noexcept nogil:
     cdef cpBody *body = root
     while body != NULL:
@@ -943,7 +954,8 @@ cdef bint cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count, bint t
             # component is always active, so skipping it changes nothing.)
             if ComponentRoot(body) == NULL and cpBodyGetType(body) == CP_BODY_TYPE_DYNAMIC:
                 outside = FloodFillComponent(body, body)
-                if not ComponentActive(body, space.sleepTimeThreshold):
+                if (not ComponentActive(body, space.sleepTimeThreshold)
+                        and not _componentNonFinite(body)):
                     cpArrayPush(space.sleepingComponents, body)
                     other = body
                     while other != NULL:
