@@ -533,6 +533,26 @@ def test_an_overflow_and_a_raising_callback_in_one_step(solver):
     assert finite(a) and finite(b)
 
 
+def test_a_soft_space_that_overflowed_and_was_reset_can_be_copied():
+    # The soft step sets how far the broad phase reaches into the static tree
+    # from the fastest body's speed, before the step: a speed that overflows
+    # made it infinite, and once the bodies were reset the copy of the space
+    # still refused it ("reaches inf into the static tree").
+    s = Space(solver="soft")
+    a, b = Body(1, 1), Body(1, 1)      # b outside the space, held by the joint
+    a.velocity = (1e300, 0)
+    b.position = (10, 0)
+    s.add(a, Circle(a, 1), PinJoint(a, b))
+    e = overflow(s)
+    assert e is not None
+    reset(e.bodies)
+    a.position = 0, 0
+    clone = s.copy()
+    for _ in range(10):
+        clone.step(DT)
+    assert finite(a) and all(finite(x) for x in clone.bodies)
+
+
 def test_a_static_body_in_the_space_that_overflows_is_named():
     s = Space()
     ground = Body(body_type=Body.STATIC)
