@@ -886,8 +886,11 @@ def test_fuzz_sleeping_soft_solver(seed, tmp_path):
 # Seeds of the sleeping mode that found faults (stop 39), in both solvers:
 # 1709 the graph check's false loop; 1919 an overflow hidden by a callback's
 # error; 2085 and 2107 a segfault (a group rooted outside the space); 2075
-# and 2082 a NaN body put to sleep, out of the overflow check's reach.
-REGRESSION_SEEDS = [1709, 1919, 2075, 2082, 2085, 2107]
+# and 2082 a NaN body put to sleep, out of the overflow check's reach; 2016
+# and 2138 a kinematic body outside the space keeping a sleeping body's
+# arbiter threaded; 2164 and 2174 a NaN body asleep, left out of an
+# overflow's IllegalBody.bodies.
+REGRESSION_SEEDS = [1709, 1919, 2016, 2075, 2082, 2085, 2107, 2138, 2164, 2174]
 
 
 def _regression_params():
