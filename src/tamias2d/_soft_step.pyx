@@ -274,7 +274,6 @@ cdef struct SoftContext:
     int *blockNext            # per contact: the next one of its block
     SoftBlockCache *blockCache    # per block (blockBodies' order), built by its first pass
     int threadedCount         # last step's arbiters left threaded (-1: unthreaded as Munk2D)
-    bint threadsExact         # ... and, sleeping being on, only if this step's are the same
     bint threadsEmptied       # sleeping on, nothing asleep: the reset left no arbiter threaded
     bint threaded             # stages may run on the pool (SoftRun)
     bint serialVelocities     # a body has its own velocity_func (Python: one thread)
@@ -853,7 +852,6 @@ cdef void SoftResetArbiters(SoftContext *ctx) noexcept nogil:
     cdef bint sleep = space.sleepTimeThreshold != INFINITY
     cdef bint clean = space.softScratch.threadsClean + 1 == space.stamp
     ctx.threadedCount = -1
-    ctx.threadsExact = sleep
     ctx.threadsEmptied = sleep and space.sleepingComponents.num == 0
     # Anything that wakes or sleeps a body or drops an arbiter from here on
     # resets it (see SoftProcessComponents).
@@ -893,7 +891,8 @@ cdef bint SoftRethreadArbiters(SoftContext *ctx, int collided) noexcept nogil:
             and memcmp(saved, space.arbiters.arr, collided * sizeof(void *)) == 0):
         tamias_add(&_kept_threads, 1)
         return 1
-    if ctx.threadsExact:
+    if space.sleepTimeThreshold != INFINITY:
+        # (Nothing between the reset and here can change it: no handlers.)
         for i in range(ctx.threadedCount):
             arb = <cpArbiter *>saved[i]
             if not cpBodyIsSleeping(arb.body_a) and not cpBodyIsSleeping(arb.body_b):
@@ -920,7 +919,8 @@ cdef void SoftProcessComponents(SoftContext *ctx, cpFloat dt, int collided) noex
     # sleep in between resets the mark (cpSpaceActivateBody and the like).
     cdef cpSpace *space = ctx.space
     cdef int *links = NULL
-    if ctx.threadsEmptied and _link_components:
+    # (At a threshold <= 0 the flood fill always runs: _holdAwakeTouching.)
+    if ctx.threadsEmptied and _link_components and space.sleepTimeThreshold > 0.0:
         links = <int *>_reserve(space, SOFT_SCRATCH_COMPONENTS, 2 * space.dynamicBodies.num + 2,
                                 sizeof(int))
     if cpSpaceProcessComponents(space, dt, collided, SoftRethreadArbiters(ctx, collided), links):

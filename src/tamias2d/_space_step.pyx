@@ -723,8 +723,8 @@ cdef void _settleOutsideMembers(cpBody *root, cpSpace *space) noexcept nogil:
 # not: one outside it kept the sleeping body's arbiter on its own list, a
 # stale thread, found by the sleeping fuzzer's seeds 2016 and others), is
 # jointed to a kinematic body of the space, or touches an orphan body that
-# owns their arbiter (is its body_a). The arbiter or joint then stays with the other body, which
-# stays awake; were this body to sleep, the next step would thread that
+# owns their arbiter (is its body_a). The arbiter or joint then stays with
+# the other body, which stays awake; were this body to sleep, the next step would thread that
 # arbiter into its list a second time (a loop: the flood fill never ends).
 # Munk2D keeps such a body awake by waking it, which restarts its idle time at
 # 0; with a sleep_time_threshold <= 0 that is idle enough, and the body sleeps
