@@ -1353,6 +1353,21 @@ def _short_memory_rain(persistence):
     return s
 
 
+def _persistence_toggled(sleep):
+    # Raising the collision persistence from 0 between steps: the last
+    # step's arbiters went back to the pool while still threaded, so the
+    # next step may not keep them threaded (fuzzing seed 2065).
+    import scenes
+    s = scenes.rain(tamias2d, count=200)
+    if sleep:
+        s.sleep_time_threshold = 0.3
+
+    def hook(i):
+        s.collision_persistence = 0 if i % 10 < 5 else 3
+    s.scene_hook = hook
+    return s
+
+
 @pytest.mark.parametrize("scene", ["add_remove", "type_changes", "sleepy_pile",
                                    "rain_persistence_1", "rain_persistence_0"])
 def test_arbiter_guesses_change_nothing(scene):
@@ -1476,7 +1491,9 @@ _SWITCH_SCENES = {"sleepy_pile": _sleepy_pile, "sleepy_pyramid": _sleepy_pyramid
                   "sleepy_joints": _sleepy_joints,
                   "static_changes": _static_changes,
                   "rain_persistence_1": lambda: _short_memory_rain(1),
-                  "rain_persistence_0": lambda: _short_memory_rain(0)}
+                  "rain_persistence_0": lambda: _short_memory_rain(0),
+                  "persistence_toggled": lambda: _persistence_toggled(False),
+                  "sleepy_persistence_toggled": lambda: _persistence_toggled(True)}
 
 
 def _switch_scene(name):
@@ -1575,7 +1592,8 @@ def _off_and_on(switch, count, run):
 
 @pytest.mark.parametrize("scene", ["pyramid", "add_remove", "type_changes", "static_changes",
                                    "rain_persistence_1", "rain_persistence_0", "sleepy_pile",
-                                   "sleepy_pyramid", "sleepy_joints"])
+                                   "sleepy_pyramid", "sleepy_joints", "persistence_toggled",
+                                   "sleepy_persistence_toggled"])
 def test_arbiters_left_threaded_change_nothing(scene):
     # Where nothing can look at the bodies' arbiter lists during the
     # collision, a soft step leaves last step's arbiters threaded and
@@ -1604,6 +1622,8 @@ def test_arbiters_left_threaded_change_nothing(scene):
             if hook is not None:
                 hook(i)
             s.step(DT)
+            problem = s._contact_graph_problem()
+            assert problem is None, f"step {i}: {problem}"
             if i % 20 == 19:
                 for b in s.bodies:
                     arbs = []
@@ -1613,7 +1633,8 @@ def test_arbiters_left_threaded_change_nothing(scene):
 
     (lists_munk2d, bodies_munk2d), (lists, bodies), kept = _off_and_on(
         _soft_step._keep_arbiter_threads, _soft_step._kept_threads_count, run)
-    if scene in ("pyramid", "static_changes", "sleepy_pile", "sleepy_pyramid"):
+    if scene in ("pyramid", "static_changes", "sleepy_pile", "sleepy_pyramid",
+                 "persistence_toggled", "sleepy_persistence_toggled"):
         assert kept > 0, "no step kept its threads: nothing tested"
     assert lists == lists_munk2d
     assert repr(bodies) == repr(bodies_munk2d)

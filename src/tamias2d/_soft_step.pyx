@@ -833,8 +833,8 @@ cdef void SoftMoveContacts(SoftContext *ctx, int begin, int end) noexcept nogil:
 # (SoftRethreadArbiters; a body's list then holds the same arbiters as
 # Munk2D's, newest first). Nothing can look when sleeping is off
 # (no waking, which walks them), no begin or pre-solve handler runs, and the
-# collision persistence is above 0 (at 0 last step's arbiters went back to
-# the pool, and may be another pair's by now). cpArbiterUpdate swaps an
+# collision persistence is above 0 now and was at the last step (at 0 its
+# arbiters went back to the pool, and may be another pair's by now). cpArbiterUpdate swaps an
 # arbiter's threads with its bodies, so the lists stay consistent whatever
 # order its pair comes in.
 
@@ -848,6 +848,7 @@ cdef void SoftResetArbiters(SoftContext *ctx) noexcept nogil:
     cdef cpSpace *space = ctx.space
     cdef cpArray *arbiters = space.arbiters
     cdef void **saved
+    cdef cpArbiter *arb
     cdef int i
     cdef bint sleep = space.sleepTimeThreshold != INFINITY
     cdef bint clean = space.softScratch.threadsClean + 1 == space.stamp
@@ -861,12 +862,20 @@ cdef void SoftResetArbiters(SoftContext *ctx) noexcept nogil:
         saved = <void **>_reserve(space, SOFT_SCRATCH_THREADED, arbiters.num, sizeof(void *))
         if saved != NULL:
             for i in range(arbiters.num):
-                (<cpArbiter *>arbiters.arr[i]).state = CP_ARBITER_STATE_NORMAL
-                (<cpArbiter *>arbiters.arr[i]).softThreaded = space.stamp
-            memcpy(saved, arbiters.arr, arbiters.num * sizeof(void *))
-            ctx.threadedCount = arbiters.num
-            arbiters.num = 0
-            return
+                arb = <cpArbiter *>arbiters.arr[i]
+                if not arb.cached:
+                    # Pooled while threaded by a step at collision
+                    # persistence 0 (Munk2D's filter): the persistence was
+                    # raised since, and the pool may hand it to a new pair
+                    # in this collision, so every thread goes first.
+                    break
+                arb.state = CP_ARBITER_STATE_NORMAL
+                arb.softThreaded = space.stamp
+            else:
+                memcpy(saved, arbiters.arr, arbiters.num * sizeof(void *))
+                ctx.threadedCount = arbiters.num
+                arbiters.num = 0
+                return
     StageResetArbiters(space)
 
 cdef bint SoftRethreadArbiters(SoftContext *ctx, int collided) noexcept nogil:
