@@ -1469,8 +1469,10 @@ cdef void SoftCountRange(SoftContext *ctx, int begin, int end, bint atomic) noex
             # (Arbiters are scattered: a cache miss each otherwise.)
             SoftFetchLines(arbiters.arr[i + SOFT_ARBITER_PREFETCH], sizeof(cpArbiter))
         if i + SOFT_ARBITER_PREFETCH // 2 < end:
-            # Its contacts, now that the arbiter itself has been fetched.
-            tamias_prefetch((<cpArbiter *>arbiters.arr[i + SOFT_ARBITER_PREFETCH // 2]).contacts)
+            # Its contacts, now that the arbiter itself has been fetched
+            # (SoftContactKind reads both of a two-point manifold's).
+            arb = <cpArbiter *>arbiters.arr[i + SOFT_ARBITER_PREFETCH // 2]
+            SoftFetchLines(arb.contacts, arb.count * sizeof(cpContact))
         arb = <cpArbiter *>arbiters.arr[i]
         if arb.count <= 0 or arb.contacts == NULL:
             tamias_store(&ctx.emptyArbiter, 1)
