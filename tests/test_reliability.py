@@ -723,3 +723,48 @@ def test_a_body_outside_the_space_turned_kinematic_does_not_sleep():
     assert b.is_sleeping           # the flood fill's mark, as in pymunk
     b.body_type = Body.KINEMATIC
     assert not b.is_sleeping
+
+
+# -- the spatial hash and boxes covering millions of cells --------------------------------
+
+@isolated(timeout=60)
+@pytest.mark.parametrize("solver", ["chipmunk", "soft"])
+def test_a_fast_body_in_the_spatial_hash_steps(solver):
+    # In the soft solver a shape's box in the spatial hash grows by its
+    # body's travel in the step (continuous collision): at 1e7 per second
+    # over 10-unit cells, (3e4 cells)^2 a step, which walked cell by cell
+    # took minutes (the fuzzer's seed 7005). Such a box now takes every
+    # bucket of the table once. The ball must still stop at the wall.
+    s = Space(solver=solver)
+    s.use_spatial_hash(10.0, 100)
+    wall = Poly(s.static_body, [(0, -1e6), (1, -1e6), (1, 1e6), (0, 1e6)])
+    b = Body(1.0, 1.0)
+    b.position = -10, 0
+    b.velocity = 1e7, 0
+    ball = Circle(b, 0.5)
+    s.add(wall, b, ball)
+    for _ in range(3):
+        s.step(1 / 60)
+        sound(s)
+    if solver == "soft":
+        assert b.position.x < 0.0
+    # Queries over such a box, and one reaching past 2**31 cells.
+    assert ball in s.bb_query(tamias2d.BB(-1e6, -1e6, 1e6, 1e6), tamias2d.ShapeFilter())
+    assert wall in s.bb_query(tamias2d.BB(-1e300, -1e300, 1e300, 1e300), tamias2d.ShapeFilter())
+
+
+@isolated(timeout=60)
+def test_a_huge_static_shape_in_the_spatial_hash():
+    # A static box 1e12 wide over 1-unit cells (past the cells' 32-bit
+    # numbers): added, stepped and queried in moments; a box on it rests.
+    s = Space()
+    s.gravity = 0, -100
+    s.use_spatial_hash(1.0, 1000)
+    ground = Poly(s.static_body, [(-1e12, -1e12), (1e12, -1e12), (1e12, 0), (-1e12, 0)])
+    b = Body(1.0, tamias2d.moment_for_box(1.0, (2, 2)))
+    b.position = 0, 1
+    s.add(ground, b, Poly.create_box(b, (2, 2)))
+    for _ in range(60):
+        s.step(1 / 60)
+    assert abs(b.position.y - 1.0) < 0.2
+    assert [h.shape for h in s.point_query((0, -5), 0, tamias2d.ShapeFilter())] == [ground]

@@ -218,30 +218,61 @@ cdef inline int floor_int(cpFloat f) noexcept nogil:
     return i - 1 if (f < 0.0 and f != i) else i
 
 
-cdef inline void hashHandle(cpSpaceHash *hash, cpHandle *hand, cpBB bb) noexcept nogil:
+# A box covering more cells than this (and more than the table has) is
+# taken as covering every cell of the table: Munk2D walks its cells one by
+# one, which for a box a few thousand cells wide takes minutes (a soft-solver
+# shape whose box grows by its body's travel in the step, at a speed of
+# 1e7 per second over 10-unit cells), and past 2**31 cells the cell numbers
+# overflow. Every bucket once instead holds the box wherever it reaches;
+# queries only report candidates, whose boxes the callers test. Smaller
+# boxes keep Munk2D's order of cells, and with it pymunk's order of pairs.
+cdef const cpFloat SPACE_HASH_MAX_CELLS = 4194304.0
+
+cdef inline bint cellRange(const cpSpaceHash *hash, cpBB bb, int *l, int *r, int *b,
+                           int *t) noexcept nogil:
+    # The cells bb covers, or 0 if it covers too many (or is not finite):
+    # then every bucket (SPACE_HASH_MAX_CELLS).
     cdef cpFloat dim = hash.celldim
-    cdef int l = floor_int(bb.l / dim)
-    cdef int r = floor_int(bb.r / dim)
-    cdef int b = floor_int(bb.b / dim)
-    cdef int t = floor_int(bb.t / dim)
+    cdef cpFloat fl = floor(bb.l / dim)
+    cdef cpFloat fr = floor(bb.r / dim)
+    cdef cpFloat fb = floor(bb.b / dim)
+    cdef cpFloat ft = floor(bb.t / dim)
+    cdef cpFloat cells = (fr - fl + 1.0) * (ft - fb + 1.0)
+    if not (cells <= SPACE_HASH_MAX_CELLS or cells <= 4.0 * hash.numcells):
+        return 0    # (NaN too)
+    if not (fl >= -2147483647.0 and fr < 2147483647.0 and fb >= -2147483647.0
+            and ft < 2147483647.0):
+        return 0
+    l[0] = floor_int(bb.l / dim)
+    r[0] = floor_int(bb.r / dim)
+    b[0] = floor_int(bb.b / dim)
+    t[0] = floor_int(bb.t / dim)
+    return 1
+
+cdef inline void hashHandleIn(cpSpaceHash *hash, cpHandle *hand, cpHashValue idx) noexcept nogil:
+    cdef cpSpaceHashBin *bin = hash.table[idx]
+    cdef cpSpaceHashBin *newBin
+    if containsHandle(bin, hand):
+        return          # never twice in the same cell
+    newBin = getEmptyBin(hash)
+    if newBin == NULL:
+        return
+    cpHandleRetain(hand)
+    newBin.handle = hand
+    newBin.next = bin
+    hash.table[idx] = newBin
+
+cdef inline void hashHandle(cpSpaceHash *hash, cpHandle *hand, cpBB bb) noexcept nogil:
+    cdef int l, r, b, t
     cdef int n = hash.numcells
     cdef int i, j
-    cdef cpHashValue idx
-    cdef cpSpaceHashBin *bin
-    cdef cpSpaceHashBin *newBin
+    if not cellRange(hash, bb, &l, &r, &b, &t):
+        for i in range(n):
+            hashHandleIn(hash, hand, <cpHashValue>i)
+        return
     for i in range(l, r + 1):
         for j in range(b, t + 1):
-            idx = hash_func(<cpHashValue>i, <cpHashValue>j, <cpHashValue>n)
-            bin = hash.table[idx]
-            if containsHandle(bin, hand):
-                continue        # never twice in the same cell
-            newBin = getEmptyBin(hash)
-            if newBin == NULL:
-                continue
-            cpHandleRetain(hand)
-            newBin.handle = hand
-            newBin.next = bin
-            hash.table[idx] = newBin
+            hashHandleIn(hash, hand, hash_func(<cpHashValue>i, <cpHashValue>j, <cpHashValue>n))
 
 
 # -- basic operations -----------------------------------------------------------------------
@@ -345,18 +376,18 @@ cdef inline void query_helper(cpSpaceHash *hash, cpSpaceHashBin **bin_ptr, void 
 cdef void cpSpaceHashQuery(cpSpatialIndex *index, void *obj, cpBB bb, cpSpatialIndexQueryFunc func,
                            void *data) noexcept nogil:
     cdef cpSpaceHash *hash = <cpSpaceHash *>index
-    cdef cpFloat dim = hash.celldim
-    cdef int l = floor_int(bb.l / dim)
-    cdef int r = floor_int(bb.r / dim)
-    cdef int b = floor_int(bb.b / dim)
-    cdef int t = floor_int(bb.t / dim)
+    cdef int l, r, b, t
     cdef int n = hash.numcells
     cdef cpSpaceHashBin **table = hash.table
     cdef int i, j
-    for i in range(l, r + 1):
-        for j in range(b, t + 1):
-            query_helper(hash, &table[hash_func(<cpHashValue>i, <cpHashValue>j, <cpHashValue>n)],
-                         obj, func, data)
+    if not cellRange(hash, bb, &l, &r, &b, &t):
+        for i in range(n):
+            query_helper(hash, &table[i], obj, func, data)
+    else:
+        for i in range(l, r + 1):
+            for j in range(b, t + 1):
+                query_helper(hash, &table[hash_func(<cpHashValue>i, <cpHashValue>j, <cpHashValue>n)],
+                             obj, func, data)
     hash.stamp += 1
 
 
@@ -372,39 +403,43 @@ cdef void queryRehash_helper(void *elt, void *data) noexcept nogil:
     cdef cpSpaceHash *hash = context.hash
     cdef cpSpatialIndexQueryFunc func = context.func
     cdef void *fdata = context.data
-    cdef cpFloat dim = hash.celldim
     cdef int n = hash.numcells
     cdef void *obj = hand.obj
     cdef cpBB bb = hash.spatialIndex.bbfunc(obj)
-    cdef int l = floor_int(bb.l / dim)
-    cdef int r = floor_int(bb.r / dim)
-    cdef int b = floor_int(bb.b / dim)
-    cdef int t = floor_int(bb.t / dim)
-    cdef cpSpaceHashBin **table = hash.table
+    cdef int l, r, b, t
     cdef int i, j
-    cdef cpHashValue idx
-    cdef cpSpaceHashBin *bin
-    cdef cpSpaceHashBin *newBin
-    for i in range(l, r + 1):
-        for j in range(b, t + 1):
-            idx = hash_func(<cpHashValue>i, <cpHashValue>j, <cpHashValue>n)
-            bin = table[idx]
-            if containsHandle(bin, hand):
-                continue
-            # Retain first: func may remove the object.
-            cpHandleRetain(hand)
-            query_helper(hash, &bin, obj, func, fdata)
-            newBin = getEmptyBin(hash)
-            if newBin == NULL:
-                # Undo the retain; the cell keeps whatever cleanup happened.
-                hand.retain -= 1
-                table[idx] = bin
-                continue
-            newBin.handle = hand
-            newBin.next = bin
-            table[idx] = newBin
+    if not cellRange(hash, bb, &l, &r, &b, &t):
+        for i in range(n):
+            queryRehashIn(hash, hand, obj, <cpHashValue>i, func, fdata)
+    else:
+        for i in range(l, r + 1):
+            for j in range(b, t + 1):
+                queryRehashIn(hash, hand, obj,
+                              hash_func(<cpHashValue>i, <cpHashValue>j, <cpHashValue>n), func, fdata)
     # One stamp per object hashed.
     hash.stamp += 1
+
+
+cdef inline void queryRehashIn(cpSpaceHash *hash, cpHandle *hand, void *obj, cpHashValue idx,
+                               cpSpatialIndexQueryFunc func, void *fdata) noexcept nogil:
+    # The object's pairs in bucket idx, and the object into it.
+    cdef cpSpaceHashBin **table = hash.table
+    cdef cpSpaceHashBin *bin = table[idx]
+    cdef cpSpaceHashBin *newBin
+    if containsHandle(bin, hand):
+        return
+    # Retain first: func may remove the object.
+    cpHandleRetain(hand)
+    query_helper(hash, &bin, obj, func, fdata)
+    newBin = getEmptyBin(hash)
+    if newBin == NULL:
+        # Undo the retain; the cell keeps whatever cleanup happened.
+        hand.retain -= 1
+        table[idx] = bin
+        return
+    newBin.handle = hand
+    newBin.next = bin
+    table[idx] = newBin
 
 
 cdef void cpSpaceHashReindexQuery(cpSpatialIndex *index, cpSpatialIndexQueryFunc func,
