@@ -485,6 +485,17 @@ cdef inline void SoftFetchLines(const void *p, int size) noexcept nogil:
     for k in range(0, size + 64, 64):
         tamias_prefetch(<const char *>p + k)
 
+cdef extern from *:
+    """
+    /* As tamias_prefetch, for a line about to be written. */
+    #if defined(__GNUC__) || defined(__clang__)
+    #define soft_prefetch_write(p) __builtin_prefetch((p), 1)
+    #else
+    #define soft_prefetch_write(p) ((void)(p))
+    #endif
+    """
+    void soft_prefetch_write(const void *p) nogil
+
 cdef inline void SoftFetchShape(const cpShape *shape) noexcept nogil:
     # What the narrow phase reads of a shape: its box and filter, and an
     # inline polygon's world planes after them (not the local half of its
@@ -1777,7 +1788,7 @@ cdef void SoftPackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
     # moved. In arbiter order the arbiters, their contacts and bodies are
     # read in the order they lie in memory, and the lanes being filled are
     # few (about two per colour), so they stay in cache until full.
-    cdef int i, slot
+    cdef int i, slot, k
     cdef cpArbiter *arb
     cdef cpArray *arbiters = ctx.space.arbiters
     cdef SoftContact local
@@ -1796,6 +1807,15 @@ cdef void SoftPackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
             SoftFetchLines(arb.contacts, arb.count * sizeof(cpContact))
             SoftFetchSlot(ctx, ctx.colorKeys[i + SOFT_ARBITER_PREFETCH // 2].ia)
             SoftFetchSlot(ctx, ctx.colorKeys[i + SOFT_ARBITER_PREFETCH // 2].ib)
+        if i + SOFT_ARBITER_PREFETCH < end:
+            # A lane about to take its first contact: all of its lines (a
+            # lane is filled over a stretch of contacts, but each contact
+            # writes to every line of it), for writing.
+            slot = ctx.contactSlots[i + SOFT_ARBITER_PREFETCH]
+            if slot >= 0 and slot % SOFT_LANES == 0:
+                for k in range(0, sizeof(SoftLanes), 64):
+                    soft_prefetch_write(<char *>&ctx.lanes[slot // SOFT_LANES] + k)
+                soft_prefetch_write(&ctx.laneLinks[slot // SOFT_LANES])
         slot = ctx.contactSlots[i]
         if slot < 0:
             continue
