@@ -768,3 +768,46 @@ def test_a_huge_static_shape_in_the_spatial_hash():
         s.step(1 / 60)
     assert abs(b.position.y - 1.0) < 0.2
     assert [h.shape for h in s.point_query((0, -5), 0, tamias2d.ShapeFilter())] == [ground]
+
+
+@pytest.mark.parametrize("solver", ["chipmunk", "soft"])
+@pytest.mark.parametrize("orphan_first", [True, False])
+@pytest.mark.parametrize("threshold", [0.0, 0.5])
+def test_a_body_resting_on_an_orphan_stays_awake(solver, orphan_first, threshold):
+    # An orphan (a dynamic body removed while its shapes stayed) is not
+    # integrated and never sleeps; a body resting on it is kept awake, as on
+    # a kinematic body, whichever of their arbiter's two bodies it is (a
+    # circle's body comes first). At a threshold of 0 only the orphan as the
+    # arbiter's first body held it: as the second, the body slept with their
+    # arbiter, which stayed threaded on the orphan's list, out of the step's
+    # array (the sleeping fuzzer's seed 2466, both solvers).
+    s = Space(solver=solver)
+    s.gravity = 0, -100
+    s.sleep_time_threshold = threshold
+    orphan = Body(10, 100)
+    orphan.position = 0, 0
+    if orphan_first:
+        under = Circle(orphan, 20)
+        body = Body(1, tamias2d.moment_for_box(1, (4, 4)))
+        body.position = 0, 22
+        top = Poly.create_box(body, (4, 4))
+    else:
+        under = Poly.create_box(orphan, (40, 10))
+        body = Body(1, 10)
+        body.position = 0, 7
+        top = Circle(body, 2)
+    s.add(orphan, under, body, top)
+    s.step(1 / 60)
+    s.remove(orphan)
+    touched = 0
+    for _ in range(120):
+        s.step(1 / 60)
+        sound(s)
+        arbiters = []
+        body.each_arbiter(arbiters.append)
+        if arbiters:
+            # (The chipmunk solver lets it sink through the orphan, which is
+            # not integrated, and then it falls free and, at 0, sleeps.)
+            touched += 1
+            assert not body.is_sleeping
+    assert touched > 0

@@ -722,8 +722,10 @@ cdef void _settleOutsideMembers(cpBody *root, cpSpace *space) noexcept nogil:
 # Kept awake this step: a body that touches a kinematic body (in the space or
 # not: one outside it kept the sleeping body's arbiter on its own list, a
 # stale thread, found by the sleeping fuzzer's seeds 2016 and others), is
-# jointed to a kinematic body of the space, or touches an orphan body that
-# owns their arbiter (is its body_a). The arbiter or joint then stays with
+# jointed to a kinematic body of the space, or touches an orphan body (its
+# arbiter's body_a or, since stop 40, body_b: the sleeping fuzzer's seed
+# 2466 put a body to sleep with the arbiter, left threaded on the orphan's
+# list, out of the step's array). The arbiter or joint then stays with
 # the other body, which stays awake; were this body to sleep, the next step would thread that
 # arbiter into its list a second time (a loop: the flood fill never ends).
 # Munk2D keeps such a body awake by waking it, which restarts its idle time at
@@ -750,7 +752,7 @@ cdef void _holdAwakeTouching(cpSpace *space, int threadCount) noexcept nogil:
         arb = <cpArbiter *>arbiters.arr[i]
         a = arb.body_a
         b = arb.body_b
-        if cpBodyGetType(b) == CP_BODY_TYPE_KINEMATIC:
+        if cpBodyGetType(b) == CP_BODY_TYPE_KINEMATIC or _orphanBody(b, space):
             _holdAwake(a, space)
         if cpBodyGetType(a) == CP_BODY_TYPE_KINEMATIC or _orphanBody(a, space):
             _holdAwake(b, space)
