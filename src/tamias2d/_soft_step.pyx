@@ -55,7 +55,8 @@ from tamias2d.constraints cimport tamias_constraint_scale_impulse
 from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, StageResetArbiters,
     cpSpaceProcessComponents, StageFilterArbiterCache, StagePostSolve,
     cpSpaceRejectPair, cpSpaceAcceptCollision, cpSpacePairIsSolid, cpSpacePushFreshContactBuffer,
-    cpContactBufferGetArray, cpSpacePushContacts, cpSpaceCollideShapes, cpShapeUpdateFunc,
+    cpContactBufferGetArray, cpContactBufferRoom, cpSpacePushContacts, cpSpaceCollideShapes,
+    cpShapeUpdateFunc,
     cpSpaceHasHandlers)
 from tamias2d.arbiter cimport cpArbiterUpdate, cpArbiterUnthread, cpArbiterPushThreads
 from tamias2d._spatialindex cimport (cpSpatialIndexEach, cpSpatialIndexReindexQuery,
@@ -564,7 +565,7 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
         if ctx.acceptInNarrow:
             # Straight into the contact buffer (this is the pairs' order):
             # the copy from the candidate, and the candidate's bytes, saved.
-            dest = cpContactBufferGetArray(ctx.space)
+            dest = cpContactBufferRoom(ctx.space)
             if dest == NULL:
                 dest = c.contacts   # out of memory: the flag is up, the pair is skipped below
         c.info = cpCollideSoft(p.a, p.b, c.id, dest, margin)
@@ -681,6 +682,7 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     cdef cpSpace *space = ctx.space
     cdef unsigned long long known, walked
     cdef cpContact *contacts
+    cdef cpArray *arbiters
     cdef int i, n, flags, stamped
     cpSpacePushFreshContactBuffer(space)
     # The awake bodies' shapes are the dynamic index's; should they not be
@@ -759,7 +761,9 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
             if flags:
                 SoftAcceptPair(ctx, i)
             continue
-        contacts = cpContactBufferGetArray(space)
+        # (The common cases of cpContactBufferGetArray, cpSpacePushContacts
+        # and cpArrayPush inline: three calls per pair were most of it.)
+        contacts = cpContactBufferRoom(space)
         ctx.destinations[i] = contacts
         if contacts == NULL:
             continue    # out of memory: the flag is up, the pair is skipped
@@ -768,8 +772,13 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
             ctx.youngPairs += 1
         stamped += 1
         if flags & SOFT_PAIR_ACCEPTED:
-            cpSpacePushContacts(space, flags >> SOFT_PAIR_COUNT_SHIFT)
-            cpArrayPush(space.arbiters, ctx.pairArbiters[i])   # (failing: the flag is up)
+            space.contactBuffersHead.numContacts += flags >> SOFT_PAIR_COUNT_SHIFT
+            arbiters = space.arbiters
+            if arbiters.num < arbiters.max:
+                arbiters.arr[arbiters.num] = ctx.pairArbiters[i]
+                arbiters.num += 1
+            else:
+                cpArrayPush(arbiters, ctx.pairArbiters[i])   # (failing: the flag is up)
     # (Each was cached and not stamped in this step: cpSpaceStampArbiter.)
     space.arbitersStamped += stamped
     SoftRun(ctx, SOFT_TASK_MOVE_CONTACTS, 0, n, 0)

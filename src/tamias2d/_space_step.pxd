@@ -15,9 +15,10 @@
 #   StageSolve               `iterations` sequential impulse passes
 #   StagePostSolve           post-solve callbacks
 #   cpSpaceUnlock(space, 1)  post-step callbacks, objects woken meanwhile
-from tamias2d._config cimport cpFloat, cpBool, cpCollisionID
+from tamias2d._config cimport (cpFloat, cpBool, cpCollisionID, CP_BUFFER_BYTES,
+    CP_MAX_CONTACTS_PER_ARBITER)
 from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArray, cpContact, cpCollisionInfo,
-    cpArbiter,
+    cpArbiter, cpContactBufferHeader,
     cpPostStepCallback, cpPostStepFunc, CP_BODY_TYPE_DYNAMIC)
 from tamias2d.body cimport cpBodyGetType
 
@@ -31,10 +32,27 @@ cdef cpBool cpSpaceAddPostStepCallback(cpSpace *space, cpPostStepFunc func, void
                                        void *data) noexcept nogil
 
 # -- contact buffers --------------------------------------------------------------------
+# Contacts per 32 KiB contact buffer, as Munk2D computes CP_CONTACTS_BUFFER_SIZE
+# (_space_step.pyx checks the two sizes at import).
+cdef enum:
+    CP_CONTACTS_BUFFER_SIZE = (CP_BUFFER_BYTES - 24) // 96
+
+cdef struct cpContactBuffer:
+    cpContactBufferHeader header
+    cpContact contacts[CP_CONTACTS_BUFFER_SIZE]
+
 cdef void cpSpacePushFreshContactBuffer(cpSpace *space) noexcept nogil
 # Room for CP_MAX_CONTACTS_PER_ARBITER contacts, or NULL when out of memory.
 cdef cpContact *cpContactBufferGetArray(cpSpace *space) noexcept nogil
 cdef void cpSpacePushContacts(cpSpace *space, int count) noexcept nogil
+
+# cpContactBufferGetArray where the head buffer has room (no call: the soft
+# step's serial pass takes one per touching pair).
+cdef inline cpContact *cpContactBufferRoom(cpSpace *space) noexcept nogil:
+    cdef cpContactBufferHeader *head = space.contactBuffersHead
+    if head != NULL and head.numContacts + CP_MAX_CONTACTS_PER_ARBITER <= CP_CONTACTS_BUFFER_SIZE:
+        return (<cpContactBuffer *>head).contacts + head.numContacts
+    return cpContactBufferGetArray(space)
 
 # -- the step and its stages --------------------------------------------------------------
 cdef void cpSpaceStep(cpSpace *space, cpFloat dt) noexcept nogil

@@ -40,14 +40,6 @@ from tamias2d._private cimport (cpArbiterThreadForBody, cpArbiterNext, cpConstra
     PHASE_BEGIN, PHASE_PRE_SOLVE, PHASE_POST_SOLVE, PHASE_SEPARATE)
 
 
-# Contacts per 32 KiB contact buffer, as Munk2D computes CP_CONTACTS_BUFFER_SIZE.
-cdef enum:
-    CP_CONTACTS_BUFFER_SIZE = (CP_BUFFER_BYTES - 24) // 96
-
-cdef struct cpContactBuffer:
-    cpContactBufferHeader header
-    cpContact contacts[CP_CONTACTS_BUFFER_SIZE]
-
 if sizeof(cpContactBufferHeader) != 24 or sizeof(cpContact) != 96:  # pragma: no cover
     raise ImportError("tamias2d._space_step: unexpected contact struct sizes")
 
