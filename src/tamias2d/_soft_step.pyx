@@ -860,9 +860,9 @@ cdef void SoftMoveContacts(SoftContext *ctx, int begin, int end) noexcept nogil:
 # Munk2D's, newest first). Nothing can look when sleeping is off
 # (no waking, which walks them), no begin or pre-solve handler runs, and the
 # collision persistence is above 0 now and was at the last step (at 0 its
-# arbiters went back to the pool, and may be another pair's by now). cpArbiterUpdate swaps an
-# arbiter's threads with its bodies, so the lists stay consistent whatever
-# order its pair comes in.
+# arbiters went back to the pool, and may be another pair's by now).
+# cpArbiterUpdate swaps an arbiter's threads with its bodies, so the lists
+# stay consistent whatever order its pair comes in.
 
 cdef void SoftResetArbiters(SoftContext *ctx) noexcept nogil:
     # Last step's arbiters are left threaded until the narrow phase has
