@@ -65,6 +65,7 @@ if os.path.join(os.path.dirname(HERE), "src") not in sys.path:
 
 import tamias2d  # noqa: E402
 from tamias2d import errors  # noqa: E402
+from tamias2d import _snapshot  # noqa: E402
 from tamias2d._snapshot import snapshot_sections  # noqa: E402
 
 import isolated  # noqa: E402
@@ -810,6 +811,8 @@ def main(argv=None):
 
 # -- the pytest side -----------------------------------------------------------------------------
 
+import pytest  # noqa: E402
+
 # Field offsets of a few records, mirroring the structs of tamias2d/_snapshot.pyx
 # and _structs.pxd (the record sizes are checked against the snapshot's own).
 BODY_LINK = {"in_space": 0, "shapeList": 4, "arbiterList": 8, "root": 12, "next": 16,
@@ -976,6 +979,38 @@ def test_constraint_array_naming_a_joint_twice_is_refused():
     assert snap.count("solver constraint array") >= 2
     snap.set_i32("solver constraint array", 1, 0, snap.i32("solver constraint array", 0))
     _refused(snap, "the solver's constraint array names constraint [0-9]+ twice")
+
+
+@pytest.mark.parametrize("section,offset", [("slide joint", 56), ("ratchet joint", 112),
+                                            ("gear joint", 56)])
+def test_joint_parameter_its_setter_refuses_is_refused(section, offset):
+    # A copy rebuilds the joints through their setters, which refuse a
+    # parameter beyond 1e100 (constraints.PARAMETER_LIMIT): a snapshot with
+    # one (an error_bias at +56, the ratchet's phase at +112) restored and
+    # stepped, but its copy was refused (this fuzzer's seed 4040).
+    snap = Snap(joints())
+    snap.set_f64(section, 0, offset, 1e150)
+    _refused(snap, rf"constraint [0-9]+ (\({section}\) has a parameter|has max_force)")
+
+
+def test_joint_ranges_the_setters_accept_copy():
+    # The other way round: what the setters accept, a snapshot accepts (a
+    # slide joint with min > max, a limit far below -1e150), and the copy
+    # steps as the original does.
+    assert _snapshot.JOINT_PARAMETER_LIMIT == tamias2d.constraints.PARAMETER_LIMIT
+    space = tamias2d.Space()
+    space.gravity = 0, -100
+    a, b = _ball(space, 1, 1, (0, 0)), _ball(space, 1, 1, (7, 0))
+    space.add(tamias2d.SlideJoint(a, b, (0, 0), (0, 0), 10, 5),
+              tamias2d.RotaryLimitJoint(a, b, -1e300, 1e300),
+              tamias2d.DampedSpring(a, b, (0, 0), (0, 0), 7, 10, 0))
+    twins = [space.copy(), pickle.loads(pickle.dumps(space))]
+    for _ in range(20):
+        for s in [space] + twins:
+            s.step(DT)
+    ref = [(tuple(b.position), b.angle) for b in space.bodies]
+    for t in twins:
+        assert [(tuple(b.position), b.angle) for b in t.bodies] == ref
 
 
 def test_awake_body_claiming_to_be_a_sleeping_root_is_refused():

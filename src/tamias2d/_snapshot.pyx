@@ -446,9 +446,28 @@ cdef inline bint _impulse(double j, double arm) noexcept nogil:
     # infinite moment is NaN).
     return _fin(j) and fabs(j) * arm <= 1e300
 
+# A joint's parameters as its constructor and setters accept them
+# (constraints.pyx, PARAMETER_LIMIT): a copy rebuilds each joint through
+# them, so a snapshot whose joint the setters refuse would restore but not
+# copy (the mutation fuzzer's seed 4040: an error_bias or a phase of 1e150).
+JOINT_PARAMETER_LIMIT = 1e100
+cdef double _JOINT_LIMIT = 1e100
+
+cdef inline bint _param(double x) noexcept nogil:
+    return fabs(x) <= _JOINT_LIMIT
+
+cdef inline bint _paramv(cpVect v) noexcept nogil:
+    return _param(v.x) and _param(v.y)
+
+cdef inline bint _divisor(double x) noexcept nogil:
+    # A ratio or notch the solver divides by: 0, or an inverse within the limit.
+    return _param(x) and (x == 0.0 or fabs(x) >= 1.0 / _JOINT_LIMIT)
+
 cdef inline bint _limits(double lo, double hi) noexcept nogil:
-    # A joint's range: an infinite end means no limit on that side.
-    return (lo == -INFINITY or _modest(lo)) and (hi == INFINITY or _modest(hi)) and lo <= hi
+    # A joint's range: a lower end up to the limit (-inf: none), an upper end
+    # from minus the limit (inf: none); min > max is the setters' to allow
+    # (pymunk does), and a step solves it.
+    return lo <= _JOINT_LIMIT and hi >= -_JOINT_LIMIT
 
 cdef inline double _inverse(double x) noexcept nogil:
     # How the body setters store an inverse mass or moment.
@@ -1786,10 +1805,11 @@ _JOINT_NAMES = ("pin joint", "slide joint", "pivot joint", "groove joint", "damp
                 "damped rotary spring", "rotary limit joint", "ratchet joint", "gear joint",
                 "simple motor")
 
-# The numbers of one joint. Parameters: what a step can solve without a
-# NaN (the values the issue of finite-but-hopeless parameters lists: a
-# groove of no length, a range from inf to inf, a rest length of 1e308, a
-# gear ratio whose inverse overflows, a motor rate of 1e308, all refused).
+# The numbers of one joint. Parameters: what its setters accept (within
+# +-1e100, above), which a step solves without a NaN (the values the issue
+# of finite-but-hopeless parameters lists: a groove of no length, a range
+# from inf to inf, a rest length of 1e308, a gear ratio whose inverse
+# overflows, a motor rate of 1e308, all refused).
 # Accumulated impulses warm-start the next step: finite, with moments that
 # stay finite. The other cached values are recomputed by the joint's
 # pre-step before they are used.
@@ -1807,27 +1827,27 @@ cdef int _check_joint(int32_t k, int kind, const char *data) except -1:
     cdef const cpSimpleMotor *motor
     cdef cpVect n
     cdef bint ok = True
-    if not (c.maxForce >= 0.0 and _fin(c.errorBias) and c.errorBias >= 0.0
+    if not (c.maxForce >= 0.0 and _param(c.errorBias) and c.errorBias >= 0.0
             and c.maxBias >= 0.0):
         _bad(f"constraint {k} has max_force {c.maxForce}, error_bias {c.errorBias}, max_bias "
-             f"{c.maxBias} (each >= 0, error_bias finite)")
+             f"{c.maxBias} (each >= 0, error_bias at most {_JOINT_LIMIT:g})")
     if kind == 0:
         pin = <const cpPinJoint *>data
-        ok = (_modestv(pin.anchorA) and _modestv(pin.anchorB) and _modest(pin.dist)
+        ok = (_paramv(pin.anchorA) and _paramv(pin.anchorB) and _param(pin.dist)
               and _impulse(pin.jnAcc, _arm(pin.anchorA, pin.anchorB)))
     elif kind == 1:
         slide = <const cpSlideJoint *>data
-        ok = (_modestv(slide.anchorA) and _modestv(slide.anchorB)
+        ok = (_paramv(slide.anchorA) and _paramv(slide.anchorB)
               and _limits(slide.min, slide.max)
               and _impulse(slide.jnAcc, _arm(slide.anchorA, slide.anchorB)))
     elif kind == 2:
         pivot = <const cpPivotJoint *>data
-        ok = (_modestv(pivot.anchorA) and _modestv(pivot.anchorB)
+        ok = (_paramv(pivot.anchorA) and _paramv(pivot.anchorB)
               and _impulse(pivot.jAcc.x, _arm(pivot.anchorA, pivot.anchorB))
               and _impulse(pivot.jAcc.y, _arm(pivot.anchorA, pivot.anchorB)))
     elif kind == 3:
         groove = <const cpGrooveJoint *>data
-        ok = (_modestv(groove.grv_a) and _modestv(groove.grv_b) and _modestv(groove.anchorB)
+        ok = (_paramv(groove.grv_a) and _paramv(groove.grv_b) and _paramv(groove.anchorB)
               and _finv(groove.grv_tn)
               and _impulse(groove.jAcc.x, _arm(groove.grv_a, groove.anchorB))
               and _impulse(groove.jAcc.y, _arm(groove.grv_b, groove.anchorB)))
@@ -1842,34 +1862,34 @@ cdef int _check_joint(int32_t k, int kind, const char *data) except -1:
                 _bad(f"constraint {k} (groove joint)'s normal does not match its groove")
     elif kind == 4:
         spring = <const cpDampedSpring *>data
-        ok = (_modestv(spring.anchorA) and _modestv(spring.anchorB)
-              and _modest(spring.restLength) and _modest(spring.stiffness)
-              and _modest(spring.damping) and _impulse(spring.jAcc, _arm(spring.anchorA, spring.anchorB)))
+        ok = (_paramv(spring.anchorA) and _paramv(spring.anchorB)
+              and _param(spring.restLength) and _param(spring.stiffness)
+              and _param(spring.damping) and spring.damping >= 0.0
+              and _impulse(spring.jAcc, _arm(spring.anchorA, spring.anchorB)))
     elif kind == 5:
         rspring = <const cpDampedRotarySpring *>data
-        ok = (_modest(rspring.restAngle) and _modest(rspring.stiffness)
-              and _modest(rspring.damping) and _impulse(rspring.jAcc, 1.0))
+        ok = (_param(rspring.restAngle) and _param(rspring.stiffness)
+              and _param(rspring.damping) and rspring.damping >= 0.0 and _impulse(rspring.jAcc, 1.0))
     elif kind == 6:
         limit = <const cpRotaryLimitJoint *>data
         ok = _limits(limit.min, limit.max) and _impulse(limit.jAcc, 1.0)
     elif kind == 7:
         ratchet = <const cpRatchetJoint *>data
-        ok = (_modest(ratchet.angle) and _modest(ratchet.phase) and _modest(ratchet.ratchet)
+        ok = (_param(ratchet.angle) and _param(ratchet.phase) and _divisor(ratchet.ratchet)
               and _impulse(ratchet.jAcc, 1.0))
     elif kind == 8:
         gear = <const cpGearJoint *>data
         # The setter keeps 1 / ratio beside the ratio; the pre-step uses both
         # (a ratio of 0 is the step's to refuse, as for a gear made so).
-        ok = (_modest(gear.phase) and _modest(gear.ratio)
-              and gear.ratio_inv == _inverse(gear.ratio)
-              and (gear.ratio == 0.0 or _modest(gear.ratio_inv)) and _impulse(gear.jAcc, 1.0))
+        ok = (_param(gear.phase) and _divisor(gear.ratio)
+              and gear.ratio_inv == _inverse(gear.ratio) and _impulse(gear.jAcc, 1.0))
     else:
         motor = <const cpSimpleMotor *>data
-        ok = _modest(motor.rate) and _impulse(motor.jAcc, 1.0)
+        ok = _param(motor.rate) and _impulse(motor.jAcc, 1.0)
     if not ok:
         _bad(f"constraint {k} ({_JOINT_NAMES[kind]}) has a parameter the step cannot solve "
-             f"(not finite, beyond 1e150, or an empty range) or an accumulated impulse whose "
-             f"moment would overflow")
+             f"(as its setters refuse: not finite, beyond {_JOINT_LIMIT:g}, a negative "
+             f"damping) or an accumulated impulse whose moment would overflow")
     return 0
 
 # Every constraint is in the constraint lists of both its bodies, once
