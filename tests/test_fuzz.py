@@ -891,8 +891,10 @@ def test_fuzz_sleeping_soft_solver(seed, tmp_path):
 # arbiter threaded; 2164 and 2174 a NaN body asleep, left out of an
 # overflow's IllegalBody.bodies; 2065 (soft) last step's arbiters kept
 # threaded after the collision persistence was raised from 0; 2466 a body
-# put to sleep at a threshold of 0 with its arbiter on an orphan's list.
-REGRESSION_SEEDS = [1709, 1919, 2016, 2065, 2075, 2082, 2085, 2107, 2138, 2164, 2174, 2466]
+# put to sleep at a threshold of 0 with its arbiter on an orphan's list;
+# 2747 a body's bias velocity left non-finite after its velocity was reset.
+REGRESSION_SEEDS = [1709, 1919, 2016, 2065, 2075, 2082, 2085, 2107, 2138, 2164, 2174, 2466,
+                    2747]
 
 
 def _regression_params():

@@ -27,7 +27,7 @@ import weakref
 from tamias2d._weakkeysview import WeakKeysView
 
 from cpython.ref cimport PyObject, Py_INCREF
-from libc.math cimport INFINITY
+from libc.math cimport INFINITY, isfinite
 from libc.stdint cimport uintptr_t
 from libc.string cimport memset
 
@@ -849,6 +849,15 @@ cdef class Body:
         cdef cpVect value = _finite_vect(vel, "velocity")
         tamias_wait_body(&self._body)
         cpBodySetVelocity(&self._body, value)
+        if not (isfinite(self._body.v_bias.x) and isfinite(self._body.v_bias.y)):
+            # The solver's bias velocity, which no setter reaches, went with
+            # the velocity it came with: a body the space never integrates
+            # (an orphan: removed while its shapes stayed) keeps the bias
+            # that contacts give it from step to step, and once that
+            # overflowed, resetting the velocity after an overflowed step
+            # did not make the body finite (nor the space copyable).
+            self._body.v_bias.x = 0.0
+            self._body.v_bias.y = 0.0
 
     @property
     def force(self):
@@ -908,6 +917,8 @@ cdef class Body:
         cdef double value = _finite_float(w, "angular_velocity")
         tamias_wait_body(&self._body)
         cpBodySetAngularVelocity(&self._body, value)
+        if not isfinite(self._body.w_bias):
+            self._body.w_bias = 0.0     # (as for velocity)
 
     @property
     def torque(self):
