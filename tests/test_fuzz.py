@@ -36,6 +36,12 @@ after body.sleep() on a box under another (both solvers), the soft step's
 broad-phase reach made infinite by an overflowing body (the copy refused
 it), and this checker taking a sleeping component with shapeless members
 for a loop.
+
+``--threads 2`` makes the space threaded (``Space(threaded=True)``, two
+threads) and runs every soft step on the pool however few its contacts, so
+that the threaded collision's own passes see every operation; two threads
+work together where a stage has more than one chunk. CI runs 2 seeds x
+both modes x 6,000 of it.
 """
 import argparse
 import math
@@ -100,11 +106,13 @@ def _values_ok(r, kind):
 class Fuzzer:
     """One fuzz run over one engine module."""
 
-    def __init__(self, mod, seed, log, solver="chipmunk"):
+    def __init__(self, mod, seed, log, solver="chipmunk", threads=1):
         self.mod = mod
         self.r = random.Random(seed)
         self.log = log
-        self.space = mod.Space(solver=solver)
+        self.space = mod.Space(solver=solver, threaded=threads > 1)
+        if threads > 1:
+            self.space.threads = threads
         self.space.gravity = 0, -300
         self.bodies = []
         self.shapes = []
@@ -628,8 +636,8 @@ class SleepFuzzer(Fuzzer):
 
     THRESHOLDS = [0.0, 0.0, 1e-9, 0.05, 0.5, math.inf]
 
-    def __init__(self, mod, seed, log, solver="chipmunk"):
-        super().__init__(mod, seed, log, solver)
+    def __init__(self, mod, seed, log, solver="chipmunk", threads=1):
+        super().__init__(mod, seed, log, solver, threads)
         self.joints = []
         self.copies = 0
         self.space.sleep_time_threshold = self.r.choice(self.THRESHOLDS[:-1])
@@ -771,14 +779,23 @@ def main(argv=None):
     ap.add_argument("--solver", choices=["chipmunk", "soft"], default="chipmunk",
                     help="the space's solver (the soft one keeps arbiter lists and skips the "
                          "sleeping flood fill where it can: both checked by the same invariants)")
+    ap.add_argument("--threads", type=int, default=1,
+                    help="a threaded space (Space(threaded=True)) with this many threads, every "
+                         "soft step on the pool however small (default 1: not threaded)")
     ap.add_argument("--check-every-op", action="store_true",
                     help="check the contact graph after every operation, not only after steps "
                          "(slower; names the operation that broke it)")
     args = ap.parse_args(argv)
     sys.path.insert(0, ROOT)
     import tamias2d
+    if args.threads > 1:
+        # Every step on the pool, however few its contacts (the soft
+        # solver's; the chipmunk solver steps on one thread regardless).
+        from tamias2d import _soft_step
+        _soft_step._threaded_min_contacts_set(0)
     log = open(args.log, "w") if args.log else sys.stdout
-    fz = (SleepFuzzer if args.mode == "sleep" else Fuzzer)(tamias2d, args.seed, log, args.solver)
+    fz = (SleepFuzzer if args.mode == "sleep" else Fuzzer)(tamias2d, args.seed, log, args.solver,
+                                                          args.threads)
 
     def check_graph(i, name):
         problem = fz.space._contact_graph_problem()
@@ -803,11 +820,13 @@ def main(argv=None):
 
 # -- the pytest side -------------------------------------------------------------------------
 
-def _run_driver(seed, ops, tmp_path, timeout, mode="all", solver="chipmunk"):
-    log = tmp_path / f"fuzz-{mode}-{solver}-{seed}.log"
+def _run_driver(seed, ops, tmp_path, timeout, mode="all", solver="chipmunk", threads=1):
+    log = tmp_path / f"fuzz-{mode}-{solver}-{threads}-{seed}.log"
     cmd = [sys.executable, "-X", "faulthandler", os.path.abspath(__file__), "--seed", str(seed),
-           "--ops", str(ops), "--log", str(log), "--mode", mode, "--solver", solver]
-    replay = f"python tests/test_fuzz.py --seed {seed} --ops {ops} --mode {mode} --solver {solver}"
+           "--ops", str(ops), "--log", str(log), "--mode", mode, "--solver", solver,
+           "--threads", str(threads)]
+    replay = (f"python tests/test_fuzz.py --seed {seed} --ops {ops} --mode {mode} "
+              f"--solver {solver} --threads {threads}")
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, cwd=ROOT)
     except subprocess.TimeoutExpired as exc:
@@ -817,9 +836,10 @@ def _run_driver(seed, ops, tmp_path, timeout, mode="all", solver="chipmunk"):
     return proc, None, tail, replay, proc.stderr
 
 
-def _check_run(seed, ops, tmp_path, timeout, mode="all", solver="chipmunk"):
+def _check_run(seed, ops, tmp_path, timeout, mode="all", solver="chipmunk", threads=1):
     import pytest
-    proc, problem, tail, replay, stderr = _run_driver(seed, ops, tmp_path, timeout, mode, solver)
+    proc, problem, tail, replay, stderr = _run_driver(seed, ops, tmp_path, timeout, mode, solver,
+                                                      threads)
     if problem is None:
         if proc.returncode < 0:
             problem = f"crash: killed by signal {-proc.returncode}"
@@ -880,6 +900,26 @@ def test_fuzz_sleeping_soft_solver(seed, tmp_path):
     # sleep: the same invariants after every step.
     out = _check_run(seed, SLEEP_OPS, tmp_path, timeout=900 if FULL else 120, mode="sleep",
                      solver="soft")
+    assert f"{SLEEP_OPS} operations" in out, out
+
+
+THREADED_SEEDS = list(range(SEED0 + 900, SEED0 + 900 + (10 if FULL else 2)))
+
+
+def _threaded_params():
+    import pytest
+    return pytest.mark.parametrize("seed,mode", [(seed, mode) for seed in THREADED_SEEDS
+                                                 for mode in ("all", "sleep")])
+
+
+@_threaded_params()
+def test_fuzz_soft_solver_threaded(seed, mode, tmp_path):
+    # A threaded space on two threads, every soft step on the pool however
+    # few its contacts (--threads 2): the threaded collision's own serial
+    # pass, its contacts moved on the pool, the atomic counts; with two
+    # threads working only where a stage has more than a chunk.
+    out = _check_run(seed, SLEEP_OPS, tmp_path, timeout=900 if FULL else 120, mode=mode,
+                     solver="soft", threads=2)
     assert f"{SLEEP_OPS} operations" in out, out
 
 

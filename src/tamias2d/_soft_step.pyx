@@ -3095,12 +3095,16 @@ cdef void SoftWorkerMain(void *arg) noexcept nogil:
                     _pool.diag.epa_iter = d.epa_iter
         tamias_add(&_pool.inside, -1)
 
+# SOFT_THREADED_MIN_CONTACTS, but for tests and the fuzzer, which run small
+# scenes on the pool (_threaded_min_contacts_set).
+cdef int _threaded_min_contacts = SOFT_THREADED_MIN_CONTACTS
+
 cdef bint SoftPoolAcquire(cpSpace *space) noexcept nogil:
     # The pool serves one step at a time; another space stepped meanwhile
     # (from another thread) runs on its own thread, with the same result.
     # A small step runs on one thread: below some thousand contacts, two
     # threads trading the bodies' cache lines cost more than they share.
-    if space.soft.threads <= 1 or _pool.workers == 0 or space.arbiters.num < SOFT_THREADED_MIN_CONTACTS:
+    if space.soft.threads <= 1 or _pool.workers == 0 or space.arbiters.num < _threaded_min_contacts:
         return 0
     return tamias_exchange(&_pool.busy, 1) == 0
 
@@ -3308,6 +3312,19 @@ def _mass_ratio_blocks(on=None):
     if on is not None:
         _use_blocks = bool(on)
     return bool(_use_blocks)
+
+def _threaded_min_contacts_set(count=None):
+    """The fewest arbiters (last step's) a threaded space's soft step needs
+    to use its second thread (and, given `count`, set it first: 0 runs every
+    step of a threaded space on the pool, for tests and the fuzzer's
+    --threads). Returns the value before."""
+    global _threaded_min_contacts
+    before = _threaded_min_contacts
+    if count is not None:
+        if count < 0:
+            raise ValueError("count must be >= 0")
+        _threaded_min_contacts = count
+    return before
 
 def _link_sleeping_components(on=None):
     """Whether a soft step with sleeping on may tell by union-find that no
