@@ -29,11 +29,15 @@ cdef extern from *:
        has no such builtin. */
     #if defined(__GNUC__) || defined(__clang__)
     #define tamias_prefetch(p) __builtin_prefetch(p)
+    #define tamias_prefetch_write(p) __builtin_prefetch((p), 1)
     #else
     #define tamias_prefetch(p) ((void)(p))
+    #define tamias_prefetch_write(p) ((void)(p))
     #endif
     """
     void tamias_prefetch(const void *p) nogil
+    # The same for a line about to be written.
+    void tamias_prefetch_write(const void *p) nogil
 
 cdef extern from *:
     """

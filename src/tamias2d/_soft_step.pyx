@@ -67,7 +67,8 @@ from tamias2d._bbtree cimport (cpBBTreeReindexQuerySlots, cpPairSlot, cpBBTreeGe
 from tamias2d.collision cimport (cpCollideSoft, CollisionDiagnostics, cpCollisionTakeDiagnostics,
     cpCollisionPutDiagnostics)
 from tamias2d._config cimport (cpCollisionID, cpHashValue, CP_MAX_CONTACTS_PER_ARBITER,
-    CP_HASH_PAIR, tamias_prefetch, tamias_lowest_bit, CP_POLY_SHAPE_INLINE_ALLOC)
+    CP_HASH_PAIR, tamias_prefetch, tamias_prefetch_write, tamias_lowest_bit,
+    CP_POLY_SHAPE_INLINE_ALLOC)
 from tamias2d._structs cimport (cpCollisionInfo, cpHashSet, cpSegmentShape, CP_SEGMENT_SHAPE,
     cpPolyShape, cpSplittingPlane)
 from libc.string cimport memcpy
@@ -485,17 +486,6 @@ cdef inline void SoftFetchLines(const void *p, int size) noexcept nogil:
     cdef int k
     for k in range(0, size + 64, 64):
         tamias_prefetch(<const char *>p + k)
-
-cdef extern from *:
-    """
-    /* As tamias_prefetch, for a line about to be written. */
-    #if defined(__GNUC__) || defined(__clang__)
-    #define soft_prefetch_write(p) __builtin_prefetch((p), 1)
-    #else
-    #define soft_prefetch_write(p) ((void)(p))
-    #endif
-    """
-    void soft_prefetch_write(const void *p) nogil
 
 cdef inline void SoftFetchShape(const cpShape *shape) noexcept nogil:
     # What the narrow phase reads of a shape: its box and filter, and an
@@ -1823,8 +1813,8 @@ cdef void SoftPackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
             slot = ctx.contactSlots[i + SOFT_ARBITER_PREFETCH]
             if slot >= 0 and slot % SOFT_LANES == 0:
                 for k in range(0, sizeof(SoftLanes), 64):
-                    soft_prefetch_write(<char *>&ctx.lanes[slot // SOFT_LANES] + k)
-                soft_prefetch_write(&ctx.laneLinks[slot // SOFT_LANES])
+                    tamias_prefetch_write(<char *>&ctx.lanes[slot // SOFT_LANES] + k)
+                tamias_prefetch_write(&ctx.laneLinks[slot // SOFT_LANES])
         slot = ctx.contactSlots[i]
         if slot < 0:
             continue
