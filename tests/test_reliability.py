@@ -811,3 +811,25 @@ def test_a_body_resting_on_an_orphan_stays_awake(solver, orphan_first, threshold
             touched += 1
             assert not body.is_sleeping
     assert touched > 0
+
+
+@isolated(timeout=60)
+def test_a_segment_query_across_millions_of_cells():
+    # A segment query walks the cells it crosses, in order: one 2e11 long
+    # over 10-unit cells crosses 2e10 cells, past the cells' 32-bit numbers
+    # (2e9 long took 3 s). Past 4,194,304 cells it visits every bucket once
+    # instead, and finds what the tree finds.
+    found = {}
+    for hashed in (False, True):
+        s = Space()
+        if hashed:
+            s.use_spatial_hash(10.0, 100)
+        for i in range(5):
+            b = Body(1, 1)
+            b.position = 1000 * i, 0
+            s.add(b, Circle(b, 5))
+        s.add(Segment(s.static_body, (4500, -10), (4500, 10), 1))
+        hits = s.segment_query((-1e11, 0), (1e11, 0), 0, tamias2d.ShapeFilter())
+        found[hashed] = sorted((h.point.x, h.point.y) for h in hits)
+    assert len(found[False]) == 6
+    assert found[True] == found[False]

@@ -17,7 +17,7 @@ as the tree of ``_bbtree`` does; it does not depend on the tree. The tests
 drive it through ``_testing._TestTree(spatial_hash=(dim, count))``.
 """
 from libc.stdlib cimport free
-from libc.math cimport floor, INFINITY
+from libc.math cimport floor, fabs, INFINITY
 from tamias2d._config cimport cpHashValue, cpCollisionID, cpBool, CP_BUFFER_BYTES
 from tamias2d.vector cimport cpVect, cpBB, cpvmult, cpfmin, cpfabs
 from tamias2d._containers cimport (cpcalloc, cpSetOutOfMemory, cpArrayNew, cpArrayFree,
@@ -487,8 +487,7 @@ cdef void cpSpaceHashSegmentQuery(cpSpatialIndex *index, void *obj, cpVect a, cp
     cdef cpSpaceHash *hash = <cpSpaceHash *>index
     a = cpvmult(a, 1.0 / hash.celldim)
     b = cpvmult(b, 1.0 / hash.celldim)
-    cdef int cell_x = floor_int(a.x)
-    cdef int cell_y = floor_int(a.y)
+    cdef int cell_x, cell_y
     cdef cpFloat t = 0
     cdef int x_inc, y_inc
     cdef cpFloat temp_v, temp_h
@@ -513,6 +512,19 @@ cdef void cpSpaceHashSegmentQuery(cpSpatialIndex *index, void *obj, cpVect a, cp
     cdef int n = hash.numcells
     cdef cpSpaceHashBin **table = hash.table
     cdef cpHashValue idx
+    cdef cpFloat crossings = dx + dy + 2.0
+    cdef int i
+    if (not (crossings <= SPACE_HASH_MAX_CELLS or crossings <= 4.0 * n)
+            or not (fabs(a.x) < 2147483647.0 and fabs(a.y) < 2147483647.0)):
+        # Across more cells than SPACE_HASH_MAX_CELLS (a segment 1e12 long
+        # over 10-unit cells walked for an hour), or from beyond the cells'
+        # 32-bit numbers: every bucket once (the callers test each shape).
+        for i in range(n):
+            t_exit = cpfmin(t_exit, segmentQuery_helper(hash, &table[i], obj, func, data))
+        hash.stamp += 1
+        return
+    cell_x = floor_int(a.x)
+    cell_y = floor_int(a.y)
     while t < t_exit:
         idx = hash_func(<cpHashValue>cell_x, <cpHashValue>cell_y, <cpHashValue>n)
         t_exit = cpfmin(t_exit, segmentQuery_helper(hash, &table[idx], obj, func, data))
