@@ -923,7 +923,7 @@ def test_fuzz_soft_solver_threaded(seed, mode, tmp_path):
     assert f"{SLEEP_OPS} operations" in out, out
 
 
-# Seeds of the sleeping mode that found faults (stop 39), in both solvers:
+# Seeds of the sleeping mode that found faults (stops 39 and 40), in both solvers:
 # 1709 the graph check's false loop; 1919 an overflow hidden by a callback's
 # error; 2085 and 2107 a segfault (a group rooted outside the space); 2075
 # and 2082 a NaN body put to sleep, out of the overflow check's reach; 2016
