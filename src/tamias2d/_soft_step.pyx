@@ -672,7 +672,6 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     cdef cpSpace *space = ctx.space
     cdef unsigned long long known, walked
     cdef cpContact *contacts
-    cdef cpArray *arbiters
     cdef int i, n, flags, stamped
     cpSpacePushFreshContactBuffer(space)
     # The awake bodies' shapes are the dynamic index's; should they not be
@@ -751,8 +750,7 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
             if flags:
                 SoftAcceptPair(ctx, i)
             continue
-        # (The common cases of cpContactBufferGetArray, cpSpacePushContacts
-        # and cpArrayPush inline: three calls per pair were most of it.)
+        # (cpContactBufferGetArray's common case inline: a call per pair.)
         contacts = cpContactBufferRoom(space)
         ctx.destinations[i] = contacts
         if contacts == NULL:
@@ -762,13 +760,8 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
             ctx.youngPairs += 1
         stamped += 1
         if flags & SOFT_PAIR_ACCEPTED:
-            space.contactBuffersHead.numContacts += flags >> SOFT_PAIR_COUNT_SHIFT
-            arbiters = space.arbiters
-            if arbiters.num < arbiters.max:
-                arbiters.arr[arbiters.num] = ctx.pairArbiters[i]
-                arbiters.num += 1
-            else:
-                cpArrayPush(arbiters, ctx.pairArbiters[i])   # (failing: the flag is up)
+            cpSpacePushContacts(space, flags >> SOFT_PAIR_COUNT_SHIFT)
+            cpArrayPush(space.arbiters, ctx.pairArbiters[i])   # (failing: the flag is up)
     # (Each was cached and not stamped in this step: cpSpaceStampArbiter.)
     space.arbitersStamped += stamped
     SoftRun(ctx, SOFT_TASK_MOVE_CONTACTS, 0, n, 0)

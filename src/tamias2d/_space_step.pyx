@@ -717,9 +717,10 @@ cdef void _settleOutsideMembers(cpBody *root, cpSpace *space) noexcept nogil:
 # jointed to a kinematic body of the space, or touches an orphan body (its
 # arbiter's body_a or, since stop 40, body_b: the sleeping fuzzer's seed
 # 2466 put a body to sleep with the arbiter, left threaded on the orphan's
-# list, out of the step's array). The arbiter or joint then stays with
-# the other body, which stays awake; were this body to sleep, the next step would thread that
-# arbiter into its list a second time (a loop: the flood fill never ends).
+# list, out of the step's array). The arbiter or joint then stays with the
+# other body, which stays awake; were this body to sleep, the next step would
+# thread that arbiter into its list a second time (a loop: the flood fill
+# never ends).
 # Munk2D keeps such a body awake by waking it, which restarts its idle time at
 # 0; with a sleep_time_threshold <= 0 that is idle enough, and the body sleeps
 # anyway (pymunk aborts there, on the kinematic body's own component, or goes
