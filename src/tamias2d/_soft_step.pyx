@@ -32,7 +32,7 @@ step; the substep loops touch only those arrays (and the joints' structs), no
 allocation, no Python except user integrators and joints' callbacks. Graph
 colouring and SIMD lanes can partition these arrays later.
 """
-from libc.math cimport INFINITY, pow, sqrt, cos, sin, fabs, fmin, fmax
+from libc.math cimport INFINITY, pow, sqrt, cos, sin, fabs, fmin, fmax, hypot
 from libc.stdint cimport uint32_t
 from libc.string cimport memset, memcmp
 from tamias2d._config cimport cpFloat, cpBool, cpTimestamp
@@ -152,6 +152,7 @@ cdef enum:
     SOFT_SCRATCH_BLOCKS       # the light bodies and their contacts (SoftFindBlocks)
     SOFT_SCRATCH_BLOCK_CACHE  # each block's matrix and factors for the step (SoftBlockCache)
     SOFT_SCRATCH_COMPONENTS   # the sleeping components' union-find (cpSpaceProcessComponents)
+    SOFT_SCRATCH_LOADS        # the piles' loads from their weights (SoftEstimateLoads)
     SOFT_SCRATCH_COUNT
 
 # (cpSoftScratch holds 24 buffers.)
@@ -294,6 +295,13 @@ cdef struct SoftContext:
     cpFloat contactCompliance[2]  # contactSoft's compliance, and over SOFT_RATIO_STIFFENING
     cpFloat staticCompliance[2]   # the same of staticSoft
     SoftSoftness jointSoft    # the joints' position correction
+    bint youngStep            # most contacts are new (more substeps, SoftEstimateLoads's warm start)
+    bint estimating           # SoftEstimateLoads runs this step (gravity, and on)
+    cpFloat gravity           # |g|, and up (against it):
+    cpFloat upx, upy
+    int *loadHeld             # per contact: the body slot it holds up, 0: none (SoftCountContact)
+    cpFloat *loadLift         # ... the upward part of its normal; after SoftEstimateLoads, how much of its preload the estimate gives
+    cpFloat *loadEstimates    # ... the normal force the weights above put on it (<= 0: none)
 
 cdef inline int SoftIndex(cpBody *body, SoftBody *bodies, int count) noexcept nogil:
     # The slot of an awake body, or 0 (static, sleeping, removed).
@@ -420,6 +428,8 @@ cdef volatile long _kept_threads = 0
 # The same for the components found by union-find instead of the flood fill
 # (SoftProcessComponents).
 cdef bint _link_components = 1
+# SoftEstimateLoads (off only in tests and benchmarks, which compare).
+cdef bint _estimate_loads = 1
 cdef volatile long _linked_components = 0
 
 cdef inline bint SoftGuessHolds(const cpArbiter *arb, const cpCollisionInfo *info) noexcept nogil:
@@ -1251,6 +1261,9 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
                                              sizeof(SoftColorKey))
     if ctx.contacts == NULL or ctx.contactSource == NULL or ctx.colorKeys == NULL:
         return 0
+    ctx.loadEstimates = NULL
+    if ctx.estimating and not SoftReserveLoads(ctx, arbiters.num):
+        ctx.estimating = 0      # (out of memory: the flag is up; no estimates)
     ctx.warmCoef = ctx.h / prev_dt if prev_dt != 0.0 else 0.0
     ctx.loadCoef = 1.0 / prev_dt if prev_dt != 0.0 else 0.0
     # Each body's number of contacts: a contact's load is fully preloaded
@@ -1274,6 +1287,8 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     else:
         n = arbiters.num
     ctx.contactCount = n
+    if ctx.estimating:
+        SoftEstimateLoads(ctx)
     if tamias_load(&ctx.ratioPairs) and _use_blocks:
         return SoftFindBlocks(ctx)
     return 1
@@ -1427,6 +1442,153 @@ cdef void SoftGroupBlocks(SoftContext *ctx, const int *light, int *parent,
         for i in range(ctx.blockBodyCount):
             ctx.blockCache[i].built = 0
 
+# -- a pile's loads from its weights ------------------------------------------------------
+# (SOFT_ESTIMATE_MIN_CARRY in _soft_step.pxd says why.) Each body's weight,
+# and what rests on it, is shared among the contacts that hold it up, each
+# taking the same normal force, whose upward parts add up to the load; the
+# body below carries its part on. Bodies are taken from the top of the pile
+# down: a body once every body it holds up has been (Kahn's order, from the
+# contacts alone; bodies in a cycle of holds get nothing). The same pass
+# gives a pile whose contacts are all new their warm start, so that it does
+# not sink into its springs while they learn their loads.
+
+cdef bint SoftReserveLoads(SoftContext *ctx, int n) noexcept nogil:
+    # Per contact: held slot, lift, estimate, and its place in the list of
+    # its held body's holds; per slot: load, list start, holds left, queue.
+    cdef int nb = ctx.bodyCount
+    cdef size_t doubles = 2 * <size_t>n + <size_t>nb
+    cdef size_t ints = 2 * <size_t>n + 3 * <size_t>nb + 1
+    cdef char *buf = <char *>_reserve(ctx.space, SOFT_SCRATCH_LOADS,
+                                      <int>((doubles * sizeof(cpFloat) + ints * sizeof(int)
+                                             + sizeof(cpFloat) - 1) // sizeof(cpFloat)),
+                                      sizeof(cpFloat))
+    if buf == NULL:
+        return 0
+    ctx.loadLift = <cpFloat *>buf
+    ctx.loadEstimates = ctx.loadLift + n
+    ctx.loadHeld = <int *>(ctx.loadEstimates + n + nb)
+    return 1
+
+cdef inline void SoftNoteHolding(SoftContext *ctx, cpArbiter *arb, SoftColorKey *key,
+                                 int n) noexcept nogil:
+    # Whether contact n holds up one of its bodies: its push on it points
+    # up (SOFT_HOLD_MIN_LIFT), and the two touch, at rest against each
+    # other (SOFT_HOLD_REST_STEPS): a pile's, not an impact's or a contact
+    # within the speculative distance only. (Holds that carried a load last
+    # step, a test that reads neither positions nor speeds, tipped over one
+    # card house of 27 that stands with this one.)
+    cdef cpFloat w = arb.n.x * ctx.upx + arb.n.y * ctx.upy
+    cdef const cpContact *con = arb.contacts
+    cdef int held = 0
+    cdef int j
+    cdef cpFloat sep = INFINITY
+    cdef cpFloat vn, d
+    cdef cpVect pa, pb
+    cdef SoftState *sa
+    cdef SoftState *sb
+    ctx.loadHeld[n] = 0
+    ctx.loadLift[n] = 0.0
+    # The arbiter's normal points from A to B: it pushes B along it.
+    if w > SOFT_HOLD_MIN_LIFT:
+        held = key.b
+    elif w < -SOFT_HOLD_MIN_LIFT:
+        held = key.a
+        w = -w
+    if held == 0:
+        return
+    pa = SoftSlotPosition(ctx, key.ia, arb.body_a)
+    pb = SoftSlotPosition(ctx, key.ib, arb.body_b)
+    for j in range(arb.count if arb.count <= 2 else 2):
+        d = ((con[j].r2.x - con[j].r1.x + pb.x - pa.x) * arb.n.x
+             + (con[j].r2.y - con[j].r1.y + pb.y - pa.y) * arb.n.y)
+        if d < sep:
+            sep = d
+    sa = &ctx.states[key.ia]
+    sb = &ctx.states[key.ib]
+    vn = (sb.vx - sa.vx) * arb.n.x + (sb.vy - sa.vy) * arb.n.y
+    if (sep <= ctx.space.collisionSlop
+            and fabs(vn) <= SOFT_HOLD_REST_STEPS * ctx.gravity * ctx.space.curr_dt):
+        ctx.loadHeld[n] = held
+        ctx.loadLift[n] = w
+
+cdef void SoftEstimateLoads(SoftContext *ctx) noexcept nogil:
+    # Each holding contact's estimate (ctx.loadEstimates): the normal force
+    # the weights above put on it, negative where its body carries no more
+    # than SOFT_ESTIMATE_MIN_CARRY times its weight (only a young step's
+    # warm start takes it there).
+    cdef int n = ctx.contactCount
+    cdef int nb = ctx.bodyCount
+    cdef int *held = ctx.loadHeld
+    cdef cpFloat *lift = ctx.loadLift
+    cdef cpFloat *estimate = ctx.loadEstimates
+    cdef cpFloat *load = estimate + n
+    cdef int *listed = held + n
+    cdef int *first = listed + n
+    cdef int *waiting = first + nb + 1     # holds of a body not yet taken
+    cdef int *queue = waiting + nb
+    cdef int i, j, slot, other, head, tail
+    cdef cpFloat total, share, carry, blend
+    cdef SoftColorKey *key
+    memset(first, 0, (<size_t>nb + 1) * sizeof(int))
+    memset(waiting, 0, <size_t>nb * sizeof(int))
+    for i in range(n):
+        estimate[i] = 0.0
+        if held[i] != 0:
+            first[held[i] + 1] += 1
+            key = &ctx.colorKeys[i]
+            other = key.a if held[i] == key.b else key.b
+            if other != 0:
+                waiting[other] += 1
+    for slot in range(nb):
+        first[slot + 1] += first[slot]
+    # (first[slot] walks its list forward, to the next one's start, and is
+    # put back after.)
+    for i in range(n):
+        if held[i] != 0:
+            listed[first[held[i]]] = i
+            first[held[i]] += 1
+    for slot in range(nb, 0, -1):
+        first[slot] = first[slot - 1]
+    first[0] = 0
+    tail = 0
+    for slot in range(1, nb):
+        load[slot] = (ctx.gravity / ctx.bodies[slot].m_inv
+                      if ctx.bodies[slot].m_inv > 0.0 else 0.0)
+        if waiting[slot] == 0 and SoftMovable(ctx, slot):
+            queue[tail] = slot
+            tail += 1
+    head = 0
+    while head < tail:
+        slot = queue[head]
+        head += 1
+        total = 0.0
+        for j in range(first[slot], first[slot + 1]):
+            total += lift[listed[j]]
+        share = load[slot] / total if total > 0.0 else 0.0
+        if not share < INFINITY:
+            share = 0.0     # (weights past the doubles' range: no estimate)
+        # How much of its holds' preloads the estimate gives (the rest is
+        # their web preload), by the weights it carries.
+        carry = load[slot] * ctx.bodies[slot].m_inv / ctx.gravity
+        blend = ((carry - SOFT_ESTIMATE_MIN_CARRY)
+                 / (SOFT_ESTIMATE_FULL_CARRY - SOFT_ESTIMATE_MIN_CARRY))
+        blend = 0.0 if not blend > 0.0 else (1.0 if blend > 1.0 else blend)
+        if blend == 0.0:
+            share = -share
+        for j in range(first[slot], first[slot + 1]):
+            i = listed[j]
+            estimate[i] = share
+            key = &ctx.colorKeys[i]
+            other = key.a if slot == key.b else key.b
+            if other != 0:
+                load[other] += fabs(share) * lift[i]
+                waiting[other] -= 1
+                if waiting[other] == 0:
+                    queue[tail] = other
+                    tail += 1
+            lift[i] = blend     # (its lift is not read again)
+
+
 cdef inline int SoftNotedIndex(int guess, cpBody *body, SoftContext *ctx) noexcept nogil:
     # SoftIndex, from the slot the narrow phase noted where it is right (the
     # body itself stays out of cache).
@@ -1448,6 +1610,8 @@ cdef inline void SoftCountContact(SoftContext *ctx, cpArbiter *arb, int n, bint 
     key.kind = SoftContactKind(arb, &ctx.bodies[ia], &ctx.bodies[ib])
     key.size = SoftContactSize(arb, &ctx.bodies[ia], &ctx.bodies[ib], noted)
     key.block = 0
+    if ctx.estimating:
+        SoftNoteHolding(ctx, arb, key, n)
     if key.a != 0 and key.b != 0 and SoftLighterSide(&ctx.bodies[ia], &ctx.bodies[ib]) != 0:
         tamias_store(&ctx.ratioPairs, 1)
     if arb.e != 0.0:
@@ -1503,6 +1667,8 @@ cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept 
     cdef SoftSoftness soft
     cdef cpFloat nx, ny, rnA, rnB, rtA, rtB, kN, kT, sep, warm, size, load
     cdef cpFloat maxStiffening, preloadFraction, age, smoothing, least, mean
+    cdef cpFloat estimate = 0.0, started, share
+    cdef cpFloat pointLoad[2]
     cdef cpVect pa, pb
     cdef const cpFloat *compliance
     cdef SoftState *sa
@@ -1540,6 +1706,8 @@ cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept 
     sc.block = 0
     # Chipmunk skips the warm start of an arbiter's first step.
     warm = 0.0 if arb.state == CP_ARBITER_STATE_FIRST_COLLISION else ctx.warmCoef
+    if ctx.loadEstimates != NULL:
+        estimate = ctx.loadEstimates[n]
     for j in range(sc.count):
         con = &arb.contacts[j]
         sp = &sc.p[j]
@@ -1577,9 +1745,15 @@ cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept 
             if smoothing < SOFT_LOAD_SMOOTHING:
                 smoothing = SOFT_LOAD_SMOOTHING
         load = con.jBias + smoothing * (con.jnAcc * ctx.loadCoef - con.jBias)
+        started = 0.0
         if warm == 0.0:
             load = 0.0
             age = 0.0
+            if ctx.youngStep:
+                # A new pile starts from the weights above (SoftEstimateLoads).
+                started = fabs(estimate) / sc.count
+                load = started
+        pointLoad[j] = load
         SoftPointSoftness(sp, soft.biasRate, compliance[0], least, load, size, ctx.h)
         # The load as a substep's impulse (jnAcc is the step's).
         sp.preload = load * ctx.h * preloadFraction
@@ -1589,7 +1763,7 @@ cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept 
         sp.baseSeparation = sep - ((sp.rBx - sp.rAx) * nx + (sp.rBy - sp.rAy) * ny)
         sp.relativeVelocity = ((sb.vx - sb.w * sp.rBy - sa.vx + sa.w * sp.rAy) * nx
                                + (sb.vy + sb.w * sp.rBx - sa.vy - sa.w * sp.rAx) * ny)
-        sp.normalImpulse = con.jnAcc * warm
+        sp.normalImpulse = con.jnAcc * warm if started == 0.0 else started * ctx.h
         sp.tangentImpulse = con.jtAcc * warm
         sp.totalNormal = 0.0
         sp.totalTangent = 0.0
@@ -1600,6 +1774,19 @@ cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept 
         con.bias = age + 1.0
         con.jBias = load
         con.bounce = sp.relativeVelocity * arb.e
+    if estimate > 0.0 and preloadFraction == SOFT_PRELOAD_WEB:
+        # A web contact under a tall pile: preloaded with its estimate, not
+        # with what it carried (SOFT_ESTIMATE_MIN_CARRY), or a blend of the
+        # two (ctx.loadLift), shared between two points as their loads are,
+        # less the difference's tilt share (SOFT_PRELOAD_TILT's reason).
+        for j in range(sc.count):
+            share = 1.0
+            if sc.count == 2:
+                share = (pointLoad[j] / (pointLoad[0] + pointLoad[1])
+                         if pointLoad[0] + pointLoad[1] > 0.0 else 0.5)
+                share = 0.5 + SOFT_PRELOAD_TILT * (share - 0.5)
+            sc.p[j].preload = (ctx.loadLift[n] * estimate * ctx.h * share
+                               + (1.0 - ctx.loadLift[n]) * sc.p[j].preload)
     if sc.count == 2 and preloadFraction == SOFT_PRELOAD_CHAIN and _preload_tilt != 1.0:
         # (SOFT_PRELOAD_TILT.)
         mean = 0.5 * (sc.p[0].preload + sc.p[1].preload)
@@ -3170,6 +3357,12 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     ctx.serialVelocities = 0
     ctx.serialPositions = 0
     ctx.threaded = 0
+    ctx.youngStep = 0
+    ctx.gravity = hypot(ctx.gx, ctx.gy)
+    ctx.estimating = _estimate_loads and 0.0 < ctx.gravity < INFINITY
+    ctx.upx = -ctx.gx / ctx.gravity if ctx.estimating else 0.0
+    ctx.upy = -ctx.gy / ctx.gravity if ctx.estimating else 0.0
+    ctx.loadEstimates = NULL
     space.collideMargin = SoftSpeculative(space)
 
     SoftProfileMark(-1)
@@ -3188,7 +3381,9 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
 
     cpSpaceLock(space)
     StageFilterArbiterCache(space)
-    if ctx.youngPairs >= SOFT_YOUNG_MIN_PAIRS and 2 * ctx.youngPairs > ctx.touchingPairs:
+    ctx.youngStep = (ctx.youngPairs >= SOFT_YOUNG_MIN_PAIRS
+                     and 2 * ctx.youngPairs > ctx.touchingPairs)
+    if ctx.youngStep:
         # Most of the step's contacts are new (a pile built at rest, or
         # dropped at once): none has a warm start or a preload yet, and a
         # tall pile sags while its contacts learn their loads. More
@@ -3333,6 +3528,15 @@ def _chain_preload_tilt(share=None):
             raise ValueError("share must be within [0, 1]")
         _preload_tilt = share
     return _preload_tilt
+
+def _pile_load_estimates(on=None):
+    """Whether the soft step works out tall piles' loads from their weights
+    (SoftEstimateLoads; and, given `on`, set it first; for tests and
+    benchmarks, which compare with the step before it)."""
+    global _estimate_loads
+    if on is not None:
+        _estimate_loads = bool(on)
+    return bool(_estimate_loads)
 
 def _kept_threads_count():
     """Steps so far (all spaces) whose arbiters were left threaded."""
