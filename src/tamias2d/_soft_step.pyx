@@ -1749,10 +1749,10 @@ cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept 
         if warm == 0.0:
             load = 0.0
             age = 0.0
-            if ctx.youngStep:
-                # A new pile starts from the weights above (SoftEstimateLoads).
-                started = fabs(estimate) / sc.count
-                load = started
+            # A new contact at rest starts from the weights above it
+            # (SoftEstimateLoads; 0 where it holds nothing up).
+            started = fabs(estimate) / sc.count
+            load = started
         pointLoad[j] = load
         SoftPointSoftness(sp, soft.biasRate, compliance[0], least, load, size, ctx.h)
         # The load as a substep's impulse (jnAcc is the step's).
