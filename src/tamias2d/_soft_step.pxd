@@ -111,11 +111,8 @@ cdef const cpFloat SOFT_PRELOAD_MAX_RATIO = 300.0
 cdef const cpFloat SOFT_ESTIMATE_MIN_CARRY = 3.0
 cdef const cpFloat SOFT_ESTIMATE_FULL_CARRY = 6.0
 # A contact holds a body up (SoftEstimateLoads) where its push on it points
-# within 60 degrees of up (this cosine) ...
+# within 60 degrees of up (this cosine) and its bodies are within the slop.
 cdef const cpFloat SOFT_HOLD_MIN_LIFT = 0.5
-# ... and where its bodies are within the slop and closing or parting
-# slower than this many steps of gravity's speed.
-cdef const cpFloat SOFT_HOLD_REST_STEPS = 2.0
 # A body with a movable neighbour this many times heavier is light: the
 # rows of all the contacts of the light bodies that touch (a block) are
 # solved together, exactly (SoftSolveBlock), in place of one contact after

@@ -300,6 +300,7 @@ cdef struct SoftContext:
     cpFloat gravity           # |g|, and up (against it):
     cpFloat upx, upy
     int *loadHeld             # per contact: the body slot it holds up, 0: none (SoftCountContact)
+    int *loadOther            # ... and the slot it holds it up from (0: immovable)
     cpFloat *loadLift         # ... the upward part of its normal; after SoftEstimateLoads, how much of its preload the estimate gives
     cpFloat *loadEstimates    # ... the normal force the weights above put on it (<= 0: none)
 
@@ -1453,11 +1454,12 @@ cdef void SoftGroupBlocks(SoftContext *ctx, const int *light, int *parent,
 # not sink into its springs while they learn their loads.
 
 cdef bint SoftReserveLoads(SoftContext *ctx, int n) noexcept nogil:
-    # Per contact: held slot, lift, estimate, and its place in the list of
-    # its held body's holds; per slot: load, list start, holds left, queue.
+    # Per contact: held and holding slots, lift, estimate; the holds listed
+    # by held body (contact, lift, holding slot); per slot: load, list
+    # start, holds left, queue.
     cdef int nb = ctx.bodyCount
-    cdef size_t doubles = 2 * <size_t>n + <size_t>nb
-    cdef size_t ints = 2 * <size_t>n + 3 * <size_t>nb + 1
+    cdef size_t doubles = 3 * <size_t>n + <size_t>nb
+    cdef size_t ints = 4 * <size_t>n + 3 * <size_t>nb + 1
     cdef char *buf = <char *>_reserve(ctx.space, SOFT_SCRATCH_LOADS,
                                       <int>((doubles * sizeof(cpFloat) + ints * sizeof(int)
                                              + sizeof(cpFloat) - 1) // sizeof(cpFloat)),
@@ -1466,33 +1468,37 @@ cdef bint SoftReserveLoads(SoftContext *ctx, int n) noexcept nogil:
         return 0
     ctx.loadLift = <cpFloat *>buf
     ctx.loadEstimates = ctx.loadLift + n
-    ctx.loadHeld = <int *>(ctx.loadEstimates + n + nb)
+    ctx.loadHeld = <int *>(ctx.loadEstimates + 2 * n + nb)
+    ctx.loadOther = ctx.loadHeld + n
     return 1
 
 cdef inline void SoftNoteHolding(SoftContext *ctx, cpArbiter *arb, SoftColorKey *key,
                                  int n) noexcept nogil:
     # Whether contact n holds up one of its bodies: its push on it points
-    # up (SOFT_HOLD_MIN_LIFT), and the two touch, at rest against each
-    # other (SOFT_HOLD_REST_STEPS): a pile's, not an impact's or a contact
-    # within the speculative distance only. (Holds that carried a load last
-    # step, a test that reads neither positions nor speeds, tipped over one
-    # card house of 27 that stands with this one.)
+    # up (SOFT_HOLD_MIN_LIFT), and the two touch (within the slop), not
+    # only within the speculative distance. (Holds that carried a load last
+    # step, a test that reads no positions, tipped over one card house of
+    # 27 that stands with this one; leaving out the pairs closing or
+    # parting faster than two steps of gravity changed none of the hard
+    # cases' outcomes nor that sweep's, for a tenth of the step's time in
+    # cache misses on the bodies' speeds in a large pile.)
     cdef cpFloat w = arb.n.x * ctx.upx + arb.n.y * ctx.upy
     cdef const cpContact *con = arb.contacts
     cdef int held = 0
+    cdef int other = 0
     cdef int j
     cdef cpFloat sep = INFINITY
-    cdef cpFloat vn, d
+    cdef cpFloat d
     cdef cpVect pa, pb
-    cdef SoftState *sa
-    cdef SoftState *sb
     ctx.loadHeld[n] = 0
     ctx.loadLift[n] = 0.0
     # The arbiter's normal points from A to B: it pushes B along it.
     if w > SOFT_HOLD_MIN_LIFT:
         held = key.b
+        other = key.a
     elif w < -SOFT_HOLD_MIN_LIFT:
         held = key.a
+        other = key.b
         w = -w
     if held == 0:
         return
@@ -1503,12 +1509,9 @@ cdef inline void SoftNoteHolding(SoftContext *ctx, cpArbiter *arb, SoftColorKey 
              + (con[j].r2.y - con[j].r1.y + pb.y - pa.y) * arb.n.y)
         if d < sep:
             sep = d
-    sa = &ctx.states[key.ia]
-    sb = &ctx.states[key.ib]
-    vn = (sb.vx - sa.vx) * arb.n.x + (sb.vy - sa.vy) * arb.n.y
-    if (sep <= ctx.space.collisionSlop
-            and fabs(vn) <= SOFT_HOLD_REST_STEPS * ctx.gravity * ctx.space.curr_dt):
+    if sep <= ctx.space.collisionSlop:
         ctx.loadHeld[n] = held
+        ctx.loadOther[n] = other
         ctx.loadLift[n] = w
 
 cdef void SoftEstimateLoads(SoftContext *ctx) noexcept nogil:
@@ -1519,33 +1522,39 @@ cdef void SoftEstimateLoads(SoftContext *ctx) noexcept nogil:
     cdef int n = ctx.contactCount
     cdef int nb = ctx.bodyCount
     cdef int *held = ctx.loadHeld
+    cdef int *holding = ctx.loadOther
     cdef cpFloat *lift = ctx.loadLift
     cdef cpFloat *estimate = ctx.loadEstimates
     cdef cpFloat *load = estimate + n
-    cdef int *listed = held + n
-    cdef int *first = listed + n
+    # (Each held body's holds side by side, so that the pass from the top
+    # down reads them in order, not scattered over the contacts' arrays.)
+    cdef cpFloat *listedLift = load + nb
+    cdef int *listed = holding + n
+    cdef int *listedHolding = listed + n
+    cdef int *first = listedHolding + n
     cdef int *waiting = first + nb + 1     # holds of a body not yet taken
     cdef int *queue = waiting + nb
     cdef int i, j, slot, other, head, tail
     cdef cpFloat total, share, carry, blend
-    cdef SoftColorKey *key
+    cdef cpFloat perWeight = 1.0 / ctx.gravity
     memset(first, 0, (<size_t>nb + 1) * sizeof(int))
     memset(waiting, 0, <size_t>nb * sizeof(int))
+    memset(estimate, 0, <size_t>n * sizeof(cpFloat))
     for i in range(n):
-        estimate[i] = 0.0
         if held[i] != 0:
             first[held[i] + 1] += 1
-            key = &ctx.colorKeys[i]
-            other = key.a if held[i] == key.b else key.b
-            if other != 0:
-                waiting[other] += 1
+            if holding[i] != 0:
+                waiting[holding[i]] += 1
     for slot in range(nb):
         first[slot + 1] += first[slot]
     # (first[slot] walks its list forward, to the next one's start, and is
     # put back after.)
     for i in range(n):
         if held[i] != 0:
-            listed[first[held[i]]] = i
+            j = first[held[i]]
+            listed[j] = i
+            listedLift[j] = lift[i]
+            listedHolding[j] = holding[i]
             first[held[i]] += 1
     for slot in range(nb, 0, -1):
         first[slot] = first[slot - 1]
@@ -1563,13 +1572,13 @@ cdef void SoftEstimateLoads(SoftContext *ctx) noexcept nogil:
         head += 1
         total = 0.0
         for j in range(first[slot], first[slot + 1]):
-            total += lift[listed[j]]
+            total += listedLift[j]
         share = load[slot] / total if total > 0.0 else 0.0
         if not share < INFINITY:
             share = 0.0     # (weights past the doubles' range: no estimate)
         # How much of its holds' preloads the estimate gives (the rest is
         # their web preload), by the weights it carries.
-        carry = load[slot] * ctx.bodies[slot].m_inv / ctx.gravity
+        carry = load[slot] * ctx.bodies[slot].m_inv * perWeight
         blend = ((carry - SOFT_ESTIMATE_MIN_CARRY)
                  / (SOFT_ESTIMATE_FULL_CARRY - SOFT_ESTIMATE_MIN_CARRY))
         blend = 0.0 if not blend > 0.0 else (1.0 if blend > 1.0 else blend)
@@ -1578,15 +1587,14 @@ cdef void SoftEstimateLoads(SoftContext *ctx) noexcept nogil:
         for j in range(first[slot], first[slot + 1]):
             i = listed[j]
             estimate[i] = share
-            key = &ctx.colorKeys[i]
-            other = key.a if slot == key.b else key.b
+            lift[i] = blend     # (its lift is not read again)
+            other = listedHolding[j]
             if other != 0:
-                load[other] += fabs(share) * lift[i]
+                load[other] += fabs(share) * listedLift[j]
                 waiting[other] -= 1
                 if waiting[other] == 0:
                     queue[tail] = other
                     tail += 1
-            lift[i] = blend     # (its lift is not read again)
 
 
 cdef inline int SoftNotedIndex(int guess, cpBody *body, SoftContext *ctx) noexcept nogil:
@@ -1627,6 +1635,10 @@ cdef inline void SoftCountContact(SoftContext *ctx, cpArbiter *arb, int n, bint 
         if ib != 0:
             ctx.bodies[ib].contacts += 1
 
+cdef inline void SoftFetchMotion(SoftContext *ctx, int slot) noexcept nogil:
+    if 0 < slot < ctx.bodyCount:
+        tamias_prefetch(&ctx.motion[slot].px)
+
 cdef void SoftCountRange(SoftContext *ctx, int begin, int end, bint atomic) noexcept nogil:
     cdef cpArray *arbiters = ctx.space.arbiters
     cdef cpArbiter *arb
@@ -1640,6 +1652,11 @@ cdef void SoftCountRange(SoftContext *ctx, int begin, int end, bint atomic) noex
             # (SoftContactKind reads both of a two-point manifold's).
             arb = <cpArbiter *>arbiters.arr[i + SOFT_ARBITER_PREFETCH // 2]
             SoftFetchLines(arb.contacts, arb.count * sizeof(cpContact))
+            if ctx.estimating:
+                # And what the hold's test reads of its bodies' slots (the
+                # narrow phase noted them; a wrong guess costs a fetch).
+                SoftFetchMotion(ctx, arb.softSlotA)
+                SoftFetchMotion(ctx, arb.softSlotB)
         arb = <cpArbiter *>arbiters.arr[i]
         if arb.count <= 0 or arb.contacts == NULL:
             tamias_store(&ctx.emptyArbiter, 1)
