@@ -17,6 +17,7 @@ Criteria, written before the runs:
     step (SpaceLocked);
   * the chipmunk solver's bits do not depend on the soft settings.
 """
+import contextlib
 import copy
 import math
 import pickle
@@ -744,22 +745,29 @@ def _ground_load(space):
     return -sum(total)
 
 
+@contextlib.contextmanager
+def _pyramid_with_estimates(on, rows=60):
+    # A soft-solver pyramid built at rest, stepped with the load estimate
+    # on or off (the test switch, put back after).
+    saved = _soft_step._pile_load_estimates()
+    _soft_step._pile_load_estimates(on)
+    try:
+        sc = hc.build_pyramid(tamias2d, rows=rows)
+        sc.space.solver = "soft"
+        yield sc
+    finally:
+        _soft_step._pile_load_estimates(saved)
+
+
 @pytest.mark.parametrize("estimate", [True, False])
 def test_a_new_pile_starts_from_its_weights(estimate):
-    saved = _soft_step._pile_load_estimates()
-    _soft_step._pile_load_estimates(estimate)
-    try:
-        sc = hc.build_pyramid(tamias2d, rows=60)
-        space = sc.space
-        space.solver = "soft"
+    with _pyramid_with_estimates(estimate) as sc:
         boxes = sc.watch["boxes"]
         home = [b.position.y for b in boxes]
         for _ in range(3):
-            space.step(DT)
+            sc.space.step(DT)
         moved = max(abs(b.position.y - y) for b, y in zip(boxes, home)) / 20.0
-        carried = _ground_load(space) / (len(boxes) * 900.0 * DT)
-    finally:
-        _soft_step._pile_load_estimates(saved)
+        carried = _ground_load(sc.space) / (len(boxes) * 900.0 * DT)
     if estimate:
         assert moved < 0.005, moved
         assert abs(carried - 1.0) < 0.01, carried
@@ -770,19 +778,13 @@ def test_a_new_pile_starts_from_its_weights(estimate):
 
 @pytest.mark.parametrize("estimate", [True, False])
 def test_a_tall_pyramid_keeps_its_height(estimate):
-    saved = _soft_step._pile_load_estimates()
-    _soft_step._pile_load_estimates(estimate)
-    try:
-        sc = hc.build_pyramid(tamias2d, rows=60)
-        sc.space.solver = "soft"
+    with _pyramid_with_estimates(estimate) as sc:
         top = sc.watch["boxes"][-1]
         y0 = top.position.y
         sink = 0.0
         for _ in range(300):
             sc.space.step(DT)
             sink = max(sink, (y0 - top.position.y) / 20.0)
-    finally:
-        _soft_step._pile_load_estimates(saved)
     if estimate:
         assert sink < 0.1, sink
     else:
