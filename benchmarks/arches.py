@@ -16,11 +16,15 @@ mean radius, Heyman's), so every engine should let it fall: a control.
     PYTHONPATH=src python benchmarks/arches.py
 """
 import math
+import os
 import sys
 
-import tamias2d
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
 
-from harness import box2d_shape_def
+import tamias2d  # noqa: E402
+import hard_cases  # noqa: E402
+
+from harness import box2d_shape_def  # noqa: E402
 
 STEPS = 1800
 SCALE = 1.0 / 20.0
@@ -29,37 +33,11 @@ ARCHES = ((7, 80.0, 100.0), (11, 80.0, 100.0), (15, 80.0, 100.0), (21, 80.0, 100
 FRICTIONS = (0.36, 0.6)
 
 
-def blocks(count, inner, outer):
-    """Each block's centre and its corners about it."""
-    out = []
-    for i in range(count):
-        a0 = math.pi * i / count
-        a1 = math.pi * (i + 1) / count
-        corners = [(inner * math.cos(a0), inner * math.sin(a0)),
-                   (outer * math.cos(a0), outer * math.sin(a0)),
-                   (outer * math.cos(a1), outer * math.sin(a1)),
-                   (inner * math.cos(a1), inner * math.sin(a1))]
-        cx = sum(p[0] for p in corners) / 4.0
-        cy = sum(p[1] for p in corners) / 4.0
-        out.append(((cx, cy), [(x - cx, y - cy) for x, y in corners]))
-    return out
-
-
 def tamias(solver, count, inner, outer, friction):
-    space = tamias2d.Space(solver=solver)
-    space.gravity = 0.0, -900.0
-    ground = tamias2d.Segment(space.static_body, (-2000.0, -5.0), (2000.0, -5.0), 5.0)
-    ground.friction = math.sqrt(friction)
-    space.add(ground)
-    stones = []
-    for centre, verts in blocks(count, inner, outer):
-        body = tamias2d.Body(1.0, tamias2d.moment_for_poly(1.0, verts))
-        body.position = centre
-        shape = tamias2d.Poly(body, verts)
-        shape.friction = math.sqrt(friction)
-        space.add(body, shape)
-        stones.append(body)
-    return (lambda: space.step(1.0 / 60.0)), stones, 1.0
+    # The hard case's own builder (friction on each shape: the square root).
+    scene = hard_cases.build_arch(tamias2d, count, inner, outer, math.sqrt(friction))
+    scene.space.solver = solver
+    return (lambda: scene.space.step(1.0 / 60.0)), scene.watch["stones"], 1.0
 
 
 def box2d(count, inner, outer, friction):
@@ -70,7 +48,7 @@ def box2d(count, inner, outer, friction):
     ground.create_polygon_shape(box2d_shape_def(b2, 1.0, friction),
                                 b2.box(2000.0 * SCALE, 5.0 * SCALE, center=(0.0, -5.0 * SCALE)))
     stones = []
-    for (cx, cy), verts in blocks(count, inner, outer):
+    for (cx, cy), verts in hard_cases.arch_blocks(count, inner, outer):
         pts = [(x * SCALE, y * SCALE) for x, y in verts]
         area = 0.5 * abs(sum(pts[k][0] * pts[k - 3][1] - pts[k - 3][0] * pts[k][1]
                              for k in range(4)))

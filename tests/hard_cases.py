@@ -826,13 +826,11 @@ def _card_judge(scene, samples):
     return m["max move"] < 0.05 * scene.watch["length"] and m["max turn"] < 0.05, m
 
 
-def build_arch(mod, blocks=11, inner=80.0, outer=100.0, friction=0.6):
-    """A semicircular arch of `blocks` trapezoids (the sectors' corners)
-    between radii `inner` and `outer`, standing on the ground, held by
-    friction alone: no joints. Mass 1 per block."""
-    space = _space(mod)
-    _ground(mod, space, friction=friction)
-    stones = []
+def arch_blocks(blocks, inner, outer):
+    """The blocks of a semicircular arch between radii `inner` and `outer`:
+    each one's centre (the mean of its corners) and its corners about it
+    (benchmarks/arches.py builds the same arch in Box2D)."""
+    out = []
     for i in range(blocks):
         a0 = math.pi * i / blocks
         a1 = math.pi * (i + 1) / blocks
@@ -842,7 +840,18 @@ def build_arch(mod, blocks=11, inner=80.0, outer=100.0, friction=0.6):
                    (inner * math.cos(a1), inner * math.sin(a1))]
         cx = sum(p[0] for p in corners) / 4.0
         cy = sum(p[1] for p in corners) / 4.0
-        verts = [(x - cx, y - cy) for x, y in corners]
+        out.append(((cx, cy), [(x - cx, y - cy) for x, y in corners]))
+    return out
+
+
+def build_arch(mod, blocks=11, inner=80.0, outer=100.0, friction=0.6):
+    """A semicircular arch of `blocks` trapezoids (the sectors' corners)
+    between radii `inner` and `outer`, standing on the ground, held by
+    friction alone: no joints. Mass 1 per block."""
+    space = _space(mod)
+    _ground(mod, space, friction=friction)
+    stones = []
+    for (cx, cy), verts in arch_blocks(blocks, inner, outer):
         body = mod.Body(1.0, mod.moment_for_poly(1.0, verts))
         body.position = cx, cy
         shape = mod.Poly(body, verts)
