@@ -916,8 +916,9 @@ def _threaded_params():
 def test_fuzz_soft_solver_threaded(seed, mode, tmp_path):
     # A threaded space on two threads, every soft step on the pool however
     # few its contacts (--threads 2): the threaded collision's own serial
-    # pass, its contacts moved on the pool, the atomic counts; with two
-    # threads working only where a stage has more than a chunk.
+    # pass, its contacts' room placed before the narrow phase, the atomic
+    # counts; with two threads working only where a stage has more than a
+    # chunk.
     out = _check_run(seed, SLEEP_OPS, tmp_path, timeout=900 if FULL else 120, mode=mode,
                      solver="soft", threads=2)
     assert f"{SLEEP_OPS} operations" in out, out

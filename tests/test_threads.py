@@ -395,7 +395,8 @@ def test_soft_step_on_two_threads_gives_the_one_thread_bits(build):
 
 def test_threaded_soft_step_with_sensors_and_a_handler_gives_the_one_thread_bits():
     # On threads the arbiters the narrow phase updated are pushed from
-    # packed flags and their contacts moved on the pool; a sensor's arbiter
+    # packed flags, their contacts written where they stay by the narrow
+    # phase (room placed for each pair before it); a sensor's arbiter
     # is updated but not solved (no contacts, not in space.arbiters). With
     # a begin handler every pair goes through the one serial pass instead.
     def with_sensors():

@@ -56,6 +56,7 @@ from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, StageResetArbiter
     cpSpaceProcessComponents, StageFilterArbiterCache, StagePostSolve,
     cpSpaceRejectPair, cpSpaceAcceptCollision, cpSpacePairIsSolid, cpSpacePushFreshContactBuffer,
     cpContactBufferGetArray, cpContactBufferRoom, cpSpacePushContacts, cpSpaceCollideShapes,
+    cpContactBuffer, CP_CONTACTS_BUFFER_SIZE,
     cpShapeUpdateFunc,
     cpSpaceHasHandlers)
 from tamias2d.arbiter cimport cpArbiterUpdate, cpArbiterUnthread, cpArbiterPushThreads
@@ -70,6 +71,7 @@ from tamias2d._config cimport (cpCollisionID, cpHashValue, CP_MAX_CONTACTS_PER_A
     CP_HASH_PAIR, tamias_prefetch, tamias_prefetch_write, tamias_lowest_bit,
     CP_POLY_SHAPE_INLINE_ALLOC)
 from tamias2d._structs cimport (cpCollisionInfo, cpHashSet, cpSegmentShape, CP_SEGMENT_SHAPE,
+    cpContactBufferHeader,
     cpPolyShape, cpSplittingPlane)
 from libc.string cimport memcpy
 
@@ -262,6 +264,7 @@ cdef struct SoftContext:
     SoftCandidate *candidates # their narrow phase
     unsigned char *touching   # the pair's SOFT_PAIR_* flags (0: no contacts)
     cpContact **destinations  # on threads, with updateInNarrow: where each pair's contacts go
+    bint placedInNarrow       # ... reserved before the narrow phase, which writes them there
     cpArbiter **pairArbiters  # ... and each updated pair's arbiter (the candidate's, packed)
     bint updateInNarrow       # no begin or pre-solve callbacks: arbiters updated in parallel
     bint acceptInNarrow       # ... and one thread: the narrow phase also does SoftAcceptPair's part
@@ -486,7 +489,6 @@ cdef enum:
     SOFT_PAIR_UPDATED = 2     # its cached arbiter has them (cpArbiterUpdate done)
     SOFT_PAIR_ACCEPTED = 4    # ... and is solved (cpSpaceAcceptCollision would push it)
     SOFT_PAIR_YOUNG = 8       # ... and its first point is under SOFT_YOUNG_AGE steps old
-    SOFT_PAIR_COUNT_SHIFT = 4 # bits 4-5: its number of contacts
 
 cdef inline void SoftFetchLines(const void *p, int size) noexcept nogil:
     # Every cache line of `size` bytes from p (p need not be aligned, so one
@@ -562,15 +564,16 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
             c.id = 0
             c.guess = NULL
         dest = c.contacts
-        if ctx.acceptInNarrow:
+        if ctx.placedInNarrow:
+            dest = ctx.destinations[i]
+        elif ctx.acceptInNarrow:
             # Straight into the contact buffer (this is the pairs' order):
             # the copy from the candidate, and the candidate's bytes, saved.
             dest = cpContactBufferRoom(ctx.space)
             if dest == NULL:
                 dest = c.contacts   # out of memory: the flag is up, the pair is skipped below
         c.info = cpCollideSoft(p.a, p.b, c.id, dest, margin)
-        ctx.touching[i] = ((SOFT_PAIR_TOUCHING | (c.info.count << SOFT_PAIR_COUNT_SHIFT))
-                           if c.info.count > 0 else 0)
+        ctx.touching[i] = SOFT_PAIR_TOUCHING if c.info.count > 0 else 0
         if slot != NULL:
             slot.id = c.info.id
         if c.info.count > 0:
@@ -589,9 +592,10 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
             if c.arb != NULL and ctx.updateInNarrow:
                 # What cpSpaceAcceptCollision would do first, done here as
                 # no callback runs before it that could change its inputs
-                # (shapes' friction, elasticity, types; the handlers). The
-                # contacts are the candidate's until the serial pass moves
-                # them to the contact buffer.
+                # (shapes' friction, elasticity, types; the handlers). On
+                # threads the contacts are where they stay already
+                # (SoftPlaceContacts); otherwise they are the candidate's
+                # until the serial pass copies them to the contact buffer.
                 cpArbiterUpdate(c.arb, &c.info, ctx.space)
                 c.updated = 1
                 c.solid = cpSpacePairIsSolid(p.a, p.b)
@@ -604,8 +608,10 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
                     if (c.arb.state != CP_ARBITER_STATE_IGNORE and c.arb.processCollision
                             and c.solid):
                         ctx.touching[i] |= SOFT_PAIR_ACCEPTED
-                    if c.contacts[0].bias < SOFT_YOUNG_AGE:
+                    if c.info.arr[0].bias < SOFT_YOUNG_AGE:
                         ctx.touching[i] |= SOFT_PAIR_YOUNG
+                    if ctx.placedInNarrow:
+                        SoftSettleUpdated(ctx.space, c.arb, ctx.touching[i])
             if ctx.acceptInNarrow:
                 if dest != c.contacts:
                     SoftAcceptPlaced(ctx, i, c, dest)
@@ -681,7 +687,6 @@ cdef void SoftSetReach(cpSpace *space) noexcept nogil:
 cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     cdef cpSpace *space = ctx.space
     cdef unsigned long long known, walked
-    cdef cpContact *contacts
     cdef int i, n, flags, stamped
     cpSpacePushFreshContactBuffer(space)
     # The awake bodies' shapes are the dynamic index's; should they not be
@@ -725,17 +730,22 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     SoftProfileMark(SOFT_STAGE_BROAD_PHASE)
     ctx.pairArbiters = NULL
     ctx.destinations = NULL
+    ctx.placedInNarrow = 0
     if ctx.updateInNarrow and ctx.threaded:
         ctx.destinations = <cpContact **>_reserve(space, SOFT_SCRATCH_DESTINATIONS, n,
                                                   sizeof(cpContact *))
         ctx.pairArbiters = <cpArbiter **>_reserve(space, SOFT_SCRATCH_PAIR_ARBITERS, n,
                                                   sizeof(cpArbiter *))
+        if ctx.destinations == NULL or ctx.pairArbiters == NULL or not SoftPlaceContacts(ctx, n):
+            ctx.destinations = NULL     # (out of memory: the flag is up; the pass below)
+        else:
+            ctx.placedInNarrow = 1
     SoftRun(ctx, SOFT_TASK_NARROW, 0, n, 0)
     SoftProfileMark(SOFT_STAGE_NARROW_PHASE)
     if ctx.acceptInNarrow:
         return
-    if ctx.destinations == NULL or ctx.pairArbiters == NULL:
-        # (One thread, handlers, or out of memory.)
+    if not ctx.placedInNarrow:
+        # (Handlers, or out of memory.)
         for i in range(n):
             # Fetch the arbiter of a pair a few places on (or, for a pair
             # new this step, its slot of the arbiter cache).
@@ -744,37 +754,77 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
             if ctx.touching[i]:
                 SoftAcceptPair(ctx, i)
         return
-    # On threads, with every cached arbiter updated in the narrow phase,
-    # this pass (in pair order, on this thread) only places each pair's
-    # contacts in the contact buffers and pushes the solved arbiters, from
+    # On threads, with every cached arbiter updated in the narrow phase and
+    # its contacts written where SoftPlaceContacts placed them, this pass
+    # (in pair order, on this thread) only pushes the solved arbiters, from
     # the pairs' flags and arbiters packed in arrays; the pairs new this
-    # step go through cpSpaceAcceptCollision here. Copying the contacts and
-    # stamping the arbiters follow on the pool (SoftMoveContacts). The same
-    # arbiters, in the same order, with the same contacts in the same
-    # places, as the one pass above; a serial pass that reads each pair's
-    # candidate and arbiter was most of a large pile's serial time.
+    # step go through cpSpaceAcceptCollision here. The same arbiters, in the
+    # same order, with the same contacts, as one thread gives.
     stamped = 0
     for i in range(n):
         flags = ctx.touching[i]
         if not flags & SOFT_PAIR_UPDATED:
             if flags:
-                SoftAcceptPair(ctx, i)
+                SoftAcceptReserved(ctx, i)
             continue
-        # (cpContactBufferGetArray's common case inline: a call per pair.)
-        contacts = cpContactBufferRoom(space)
-        ctx.destinations[i] = contacts
-        if contacts == NULL:
-            continue    # out of memory: the flag is up, the pair is skipped
         ctx.touchingPairs += 1
         if flags & SOFT_PAIR_YOUNG:
             ctx.youngPairs += 1
         stamped += 1
         if flags & SOFT_PAIR_ACCEPTED:
-            cpSpacePushContacts(space, flags >> SOFT_PAIR_COUNT_SHIFT)
             cpArrayPush(space.arbiters, ctx.pairArbiters[i])   # (failing: the flag is up)
     # (Each was cached and not stamped in this step: cpSpaceStampArbiter.)
     space.arbitersStamped += stamped
-    SoftRun(ctx, SOFT_TASK_MOVE_CONTACTS, 0, n, 0)
+
+cdef bint SoftPlaceContacts(SoftContext *ctx, int n) noexcept nogil:
+    # Room in the contact buffers for every pair's contacts, the most a pair
+    # can have, in pair order (ctx.destinations), before the narrow phase:
+    # the threads write each pair's contacts where they stay, while its
+    # arbiter is in their cache. Placed after it, pair by pair, they were
+    # copied there and every arbiter visited again (a miss each): most of a
+    # large pile's serial time on two threads. The room of the pairs that
+    # do not touch goes unused until the ring reuses its buffer.
+    cdef cpSpace *space = ctx.space
+    cdef cpContactBufferHeader *head
+    cdef cpContact *base
+    cdef int i = 0, j, k, room
+    while i < n:
+        head = space.contactBuffersHead
+        room = 0
+        if head != NULL:
+            room = (CP_CONTACTS_BUFFER_SIZE - <int>head.numContacts) // CP_MAX_CONTACTS_PER_ARBITER
+        if room <= 0:
+            cpSpacePushFreshContactBuffer(space)
+            head = space.contactBuffersHead
+            if head == NULL or head.numContacts != 0:
+                return 0    # out of memory: the flag is up
+            room = CP_CONTACTS_BUFFER_SIZE // CP_MAX_CONTACTS_PER_ARBITER
+        k = room if room < n - i else n - i
+        base = (<cpContactBuffer *>head).contacts + head.numContacts
+        for j in range(k):
+            ctx.destinations[i + j] = base + CP_MAX_CONTACTS_PER_ARBITER * j
+        head.numContacts += CP_MAX_CONTACTS_PER_ARBITER * k
+        i += k
+    return 1
+
+cdef inline void SoftSettleUpdated(cpSpace *space, cpArbiter *arb, int flags) noexcept nogil:
+    # What cpSpaceAcceptCollision does to an arbiter the narrow phase
+    # updated, its contacts being where they stay (SoftPlaceContacts).
+    if not flags & SOFT_PAIR_ACCEPTED:
+        arb.contacts = NULL
+        arb.count = 0
+        if arb.state != CP_ARBITER_STATE_IGNORE:
+            arb.state = CP_ARBITER_STATE_NORMAL
+    arb.stamp = space.stamp
+
+cdef void SoftAcceptReserved(SoftContext *ctx, int i) noexcept nogil:
+    # A pair new this step whose contacts SoftPlaceContacts placed: through
+    # cpSpaceAcceptCollision, which counts them onto the head buffer (and
+    # off again if it rejects the pair); they are in the room placed.
+    cdef cpContactBufferHeader *head = ctx.space.contactBuffersHead
+    cdef unsigned int held = head.numContacts
+    SoftAcceptPlaced(ctx, i, &ctx.candidates[i], ctx.destinations[i])
+    head.numContacts = held
 
 cdef void SoftAcceptPair(SoftContext *ctx, int i) noexcept nogil:
     # Pair i's contacts into the contact buffers, its arbiter through
@@ -811,35 +861,6 @@ cdef void SoftAcceptPlaced(SoftContext *ctx, int i, SoftCandidate *c,
         ctx.youngPairs += 1
     if ctx.pairs[i].slot != NULL and c.arb == NULL:
         ctx.pairs[i].slot.arbiter = arb    # new this step: next step's guess
-
-cdef void SoftMoveContacts(SoftContext *ctx, int begin, int end) noexcept nogil:
-    # The updated pairs' contacts to where SoftCollide placed them, and
-    # what cpSpaceAcceptCollision does to their arbiters (on the pool).
-    cdef cpTimestamp stamp = ctx.space.stamp
-    cdef SoftCandidate *c
-    cdef cpContact *contacts
-    cdef cpArbiter *arb
-    cdef int i, flags
-    for i in range(begin, end):
-        if i + 4 < end and ctx.touching[i + 4] & SOFT_PAIR_UPDATED:
-            tamias_prefetch(ctx.pairArbiters[i + 4])
-        flags = ctx.touching[i]
-        if not flags & SOFT_PAIR_UPDATED:
-            continue
-        c = &ctx.candidates[i]
-        arb = ctx.pairArbiters[i]
-        contacts = ctx.destinations[i]
-        if contacts != NULL and flags & SOFT_PAIR_ACCEPTED:
-            memcpy(contacts, c.contacts, (flags >> SOFT_PAIR_COUNT_SHIFT) * sizeof(cpContact))
-            arb.contacts = contacts
-        else:
-            arb.contacts = NULL
-            arb.count = 0
-            if contacts == NULL:
-                continue    # (out of memory: skipped, not stamped)
-            if arb.state != CP_ARBITER_STATE_IGNORE:
-                arb.state = CP_ARBITER_STATE_NORMAL
-        arb.stamp = stamp
 
 
 # -- the bodies' arbiter lists -----------------------------------------------------------
@@ -3114,7 +3135,6 @@ cdef enum:
     SOFT_TASK_UPDATE_SHAPES
     SOFT_TASK_GATHER
     SOFT_TASK_COUNT
-    SOFT_TASK_MOVE_CONTACTS
 
 cdef enum:
     SOFT_CHUNK_LANES = 32         # lanes of contacts per chunk
@@ -3174,8 +3194,6 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
         SoftGatherRange(ctx, begin, end)
     elif task == SOFT_TASK_COUNT:
         SoftCountRange(ctx, begin, end, flag)
-    elif task == SOFT_TASK_MOVE_CONTACTS:
-        SoftMoveContacts(ctx, begin, end)
 
 cdef void SoftTakeChunks(bint caller) noexcept nogil:
     # The caller takes chunks from the front, the worker from the back: in
@@ -3207,7 +3225,7 @@ cdef void SoftRun(SoftContext *ctx, int task, int begin, int end, bint flag) noe
         chunk = SOFT_CHUNK_BODIES
     elif task == SOFT_TASK_STORE or task == SOFT_TASK_COUNT or task == SOFT_TASK_PACK:
         chunk = SOFT_CHUNK_CONTACTS
-    elif task == SOFT_TASK_NARROW or task == SOFT_TASK_MOVE_CONTACTS:
+    elif task == SOFT_TASK_NARROW:
         chunk = SOFT_CHUNK_PAIRS
     cdef int k
     if end <= begin:
