@@ -828,7 +828,7 @@ def _card_judge(scene, samples):
 
 def arch_blocks(blocks, inner, outer):
     """The blocks of a semicircular arch between radii `inner` and `outer`:
-    each one's centre (the mean of its corners) and its corners about it
+    each one's centre of gravity (its area centroid) and its corners about it
     (benchmarks/arches.py builds the same arch in Box2D)."""
     out = []
     for i in range(blocks):
@@ -838,8 +838,16 @@ def arch_blocks(blocks, inner, outer):
                    (outer * math.cos(a0), outer * math.sin(a0)),
                    (outer * math.cos(a1), outer * math.sin(a1)),
                    (inner * math.cos(a1), inner * math.sin(a1))]
-        cx = sum(p[0] for p in corners) / 4.0
-        cy = sum(p[1] for p in corners) / 4.0
+        # The centre of gravity: the area centroid (a trapezoid's lies
+        # toward its wider, outer side of the mean of its corners).
+        area = cx = cy = 0.0
+        for (x0, y0), (x1, y1) in zip(corners, corners[1:] + corners[:1]):
+            cross = x0 * y1 - x1 * y0
+            area += cross
+            cx += (x0 + x1) * cross
+            cy += (y0 + y1) * cross
+        cx /= 3.0 * area
+        cy /= 3.0 * area
         out.append(((cx, cy), [(x - cx, y - cy) for x, y in corners]))
     return out
 
