@@ -273,6 +273,7 @@ cdef struct SoftContext:
     volatile long customVelocity  # a body has its own velocity_func (SoftGatherRange)
     volatile long customPosition  # ... position_func
     volatile long emptyArbiter    # an arbiter has no contacts (SoftCountRange)
+    volatile long uncachedArbiter # last step's arbiters include a pooled one (SoftMarkThreaded)
     volatile long ratioPairs      # a contact's bodies' masses differ SOFT_BLOCK_RATIO times or more
     int *blockBodies          # each block's root body (SoftFindBlocks), in slot order
     int blockBodyCount
@@ -888,8 +889,6 @@ cdef void SoftResetArbiters(SoftContext *ctx) noexcept nogil:
     cdef cpSpace *space = ctx.space
     cdef cpArray *arbiters = space.arbiters
     cdef void **saved
-    cdef cpArbiter *arb
-    cdef int i
     cdef bint sleep = space.sleepTimeThreshold != INFINITY
     cdef bint clean = space.softScratch.threadsClean + 1 == space.stamp
     ctx.threadedCount = -1
@@ -901,22 +900,40 @@ cdef void SoftResetArbiters(SoftContext *ctx) noexcept nogil:
             and (not sleep or (ctx.threadsEmptied and clean))):
         saved = <void **>_reserve(space, SOFT_SCRATCH_THREADED, arbiters.num, sizeof(void *))
         if saved != NULL:
-            for i in range(arbiters.num):
-                arb = <cpArbiter *>arbiters.arr[i]
-                if not arb.cached:
-                    # Pooled while threaded by a step at collision
-                    # persistence 0 (Munk2D's filter): the persistence was
-                    # raised since, and the pool may hand it to a new pair
-                    # in this collision, so every thread goes first.
-                    break
-                arb.state = CP_ARBITER_STATE_NORMAL
-                arb.softThreaded = space.stamp
-            else:
+            tamias_store(&ctx.uncachedArbiter, 0)
+            SoftRun(ctx, SOFT_TASK_MARK_THREADED, 0, arbiters.num, 0)
+            if not tamias_load(&ctx.uncachedArbiter):
                 memcpy(saved, arbiters.arr, arbiters.num * sizeof(void *))
                 ctx.threadedCount = arbiters.num
                 arbiters.num = 0
                 return
+            # (Some were marked before the pooled one was found: the marks
+            # are read only by this step's SoftRethreadArbiters, which the
+            # full reset below does without, and the state is NORMAL either
+            # way.)
     StageResetArbiters(space)
+
+cdef void SoftMarkThreaded(SoftContext *ctx, int begin, int end) noexcept nogil:
+    # Last step's arbiters [begin, end), kept threaded: their state reset as
+    # StageResetArbiters does and each marked as threaded (on the pool: a
+    # cache miss per arbiter, which two cores wait out side by side).
+    cdef cpArray *arbiters = ctx.space.arbiters
+    cdef cpTimestamp stamp = ctx.space.stamp
+    cdef cpArbiter *arb
+    cdef int i
+    for i in range(begin, end):
+        if i + SOFT_ARBITER_PREFETCH < end:
+            tamias_prefetch_write(&(<cpArbiter *>arbiters.arr[i + SOFT_ARBITER_PREFETCH]).state)
+        arb = <cpArbiter *>arbiters.arr[i]
+        if not arb.cached:
+            # Pooled while threaded by a step at collision persistence 0
+            # (Munk2D's filter): the persistence was raised since, and the
+            # pool may hand it to a new pair in this collision, so every
+            # thread goes first (SoftResetArbiters).
+            tamias_store(&ctx.uncachedArbiter, 1)
+            return
+        arb.state = CP_ARBITER_STATE_NORMAL
+        arb.softThreaded = stamp
 
 cdef bint SoftRethreadArbiters(SoftContext *ctx, int collided) noexcept nogil:
     # Whether this step's arbiters are threaded already (else
@@ -3135,6 +3152,7 @@ cdef enum:
     SOFT_TASK_UPDATE_SHAPES
     SOFT_TASK_GATHER
     SOFT_TASK_COUNT
+    SOFT_TASK_MARK_THREADED
 
 cdef enum:
     SOFT_CHUNK_LANES = 32         # lanes of contacts per chunk
@@ -3194,6 +3212,8 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
         SoftGatherRange(ctx, begin, end)
     elif task == SOFT_TASK_COUNT:
         SoftCountRange(ctx, begin, end, flag)
+    elif task == SOFT_TASK_MARK_THREADED:
+        SoftMarkThreaded(ctx, begin, end)
 
 cdef void SoftTakeChunks(bint caller) noexcept nogil:
     # The caller takes chunks from the front, the worker from the back: in
@@ -3223,7 +3243,8 @@ cdef void SoftRun(SoftContext *ctx, int task, int begin, int end, bint flag) noe
     if (task <= SOFT_TASK_INTEGRATE_POSITIONS or task == SOFT_TASK_FINISH_BODIES
             or task == SOFT_TASK_UPDATE_SHAPES or task == SOFT_TASK_GATHER):
         chunk = SOFT_CHUNK_BODIES
-    elif task == SOFT_TASK_STORE or task == SOFT_TASK_COUNT or task == SOFT_TASK_PACK:
+    elif (task == SOFT_TASK_STORE or task == SOFT_TASK_COUNT or task == SOFT_TASK_PACK
+            or task == SOFT_TASK_MARK_THREADED):
         chunk = SOFT_CHUNK_CONTACTS
     elif task == SOFT_TASK_NARROW:
         chunk = SOFT_CHUNK_PAIRS
