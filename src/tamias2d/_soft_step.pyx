@@ -1815,8 +1815,12 @@ cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept 
         # back from the bodies' motion within the step.
         sep = ((sp.rBx - sp.rAx + pb.x - pa.x) * nx + (sp.rBy - sp.rAy + pb.y - pa.y) * ny)
         sp.baseSeparation = sep - ((sp.rBx - sp.rAx) * nx + (sp.rBy - sp.rAy) * ny)
-        sp.relativeVelocity = ((sb.vx - sb.w * sp.rBy - sa.vx + sa.w * sp.rAy) * nx
-                               + (sb.vy + sb.w * sp.rBx - sa.vy - sa.w * sp.rAx) * ny)
+        # The approach speed, which restitution reads (SoftApplyRestitution)
+        # and an inelastic contact's never is: its bodies' speeds unread.
+        sp.relativeVelocity = 0.0
+        if arb.e != 0.0:
+            sp.relativeVelocity = ((sb.vx - sb.w * sp.rBy - sa.vx + sa.w * sp.rAy) * nx
+                                   + (sb.vy + sb.w * sp.rBx - sa.vy - sa.w * sp.rAx) * ny)
         sp.normalImpulse = con.jnAcc * warm if started == 0.0 else started * ctx.h
         sp.tangentImpulse = con.jtAcc * warm
         sp.totalNormal = 0.0
