@@ -271,8 +271,30 @@ def soft_pile():
     return space
 
 
+def soft_threaded():
+    """A soft pyramid stepped on two threads, every step on the pool: its
+    contacts lie where the threaded narrow phase places them, two places
+    a pair, some left empty (SoftPlaceContacts)."""
+    from tamias2d import _soft_step
+    space = tamias2d.Space(solver="soft", threaded=True)
+    space.threads = 2
+    space.gravity = 0, -600
+    _floor(space)
+    for row in range(6):
+        for j in range(6 - row):
+            _box(space, 1, 12, 12, (-150 + 13 * j + 6.5 * row, 6 + 12 * row))
+    before = _soft_step._threaded_min_contacts_set()
+    _soft_step._threaded_min_contacts_set(0)
+    try:
+        _run(space, 60)
+    finally:
+        _soft_step._threaded_min_contacts_set(before)
+    return space
+
+
 SCENES = {
     "soft_pile": soft_pile,
+    "soft_threaded": soft_threaded,
     "sleeping_pile": sleeping_pile,
     "joints": joints,
     "spatial_hash": spatial_hash,
