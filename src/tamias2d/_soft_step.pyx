@@ -300,6 +300,8 @@ cdef struct SoftContext:
     cpFloat staticCompliance[2]   # the same of staticSoft
     SoftSoftness jointSoft    # the joints' position correction
     bint estimating           # SoftEstimateLoads runs this step (gravity, and on)
+    bint estimatePending      # ... beside the colouring (SOFT_TASK_ESTIMATE_AND_COLOR)
+    bint colored              # SoftColorContacts' answer, when run as that task
     cpFloat gravity           # |g|, and up (against it):
     cpFloat upx, upy
     int *loadHeld             # per contact: the body slot it holds up, 0: none (SoftCountContact)
@@ -1325,9 +1327,13 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     else:
         n = arbiters.num
     ctx.contactCount = n
-    if ctx.estimating:
-        SoftEstimateLoads(ctx)
+    # The estimate runs beside the colouring, which does not read it
+    # (cpSoftStep), unless blocks are found, which come after it.
+    ctx.estimatePending = ctx.estimating
     if tamias_load(&ctx.ratioPairs) and _use_blocks:
+        if ctx.estimating:
+            SoftEstimateLoads(ctx)
+            ctx.estimatePending = 0
         return SoftFindBlocks(ctx)
     return 1
 
@@ -1902,6 +1908,19 @@ cdef inline bint SoftMovable(SoftContext *ctx, int slot) noexcept nogil:
     # (static, kinematic, sleeping) are shared freely between contacts of a
     # colour; they are read, never written.
     return slot != 0 and (ctx.bodies[slot].m_inv != 0.0 or ctx.bodies[slot].i_inv != 0.0)
+
+cdef bint SoftReserveColors(SoftContext *ctx) noexcept nogil:
+    # Every buffer SoftColorContacts asks for, as large as it can ask (each
+    # colour's last lane of a kind may be part full), so that it allocates
+    # nothing when it runs on the pool.
+    cdef cpSpace *space = ctx.space
+    cdef int n = ctx.contactCount
+    cdef int lanes = (n + SOFT_LANES - 1) // SOFT_LANES + 2 * SOFT_GRAPH_COLORS
+    return (_reserve(space, SOFT_SCRATCH_BITS, ctx.bodyCount, sizeof(uint32_t)) != NULL
+            and _reserve(space, SOFT_SCRATCH_COLORS, n, sizeof(int)) != NULL
+            and _reserve(space, SOFT_SCRATCH_OVERFLOW, n, sizeof(int)) != NULL
+            and _reserve_lines(space, SOFT_SCRATCH_LANES, lanes, sizeof(SoftLanes)) != NULL
+            and _reserve(space, SOFT_SCRATCH_LANE_LINKS, lanes, sizeof(SoftLaneLinks)) != NULL)
 
 cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
     # Greedy colouring in arbiter order (so a copy continues alike): each
@@ -3157,6 +3176,7 @@ cdef enum:
     SOFT_TASK_GATHER
     SOFT_TASK_COUNT
     SOFT_TASK_MARK_THREADED
+    SOFT_TASK_ESTIMATE_AND_COLOR
 
 cdef enum:
     SOFT_CHUNK_LANES = 32         # lanes of contacts per chunk
@@ -3218,6 +3238,12 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
         SoftCountRange(ctx, begin, end, flag)
     elif task == SOFT_TASK_MARK_THREADED:
         SoftMarkThreaded(ctx, begin, end)
+    elif task == SOFT_TASK_ESTIMATE_AND_COLOR:
+        for i in range(begin, end):
+            if i == 0:
+                SoftEstimateLoads(ctx)
+            else:
+                ctx.colored = SoftColorContacts(ctx)
 
 cdef void SoftTakeChunks(bint caller) noexcept nogil:
     # The caller takes chunks from the front, the worker from the back: in
@@ -3252,6 +3278,8 @@ cdef void SoftRun(SoftContext *ctx, int task, int begin, int end, bint flag) noe
         chunk = SOFT_CHUNK_CONTACTS
     elif task == SOFT_TASK_NARROW:
         chunk = SOFT_CHUNK_PAIRS
+    elif task == SOFT_TASK_ESTIMATE_AND_COLOR:
+        chunk = 1
     cdef int k
     if end <= begin:
         return
@@ -3449,7 +3477,16 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     ready = (SoftGatherBodies(&ctx) and SoftPrepareJoints(&ctx, prev_dt)
              and SoftPrepareContacts(&ctx, prev_dt))
     SoftProfileMark(SOFT_STAGE_PREPARE)
-    ready = ready and SoftColorContacts(&ctx)
+    if ready and ctx.estimatePending:
+        # Two serial passes with nothing in common: on two threads, one
+        # each (in order on one). The colouring's buffers are made here
+        # first: an allocation's failure is seen by the thread it fails on.
+        ready = SoftReserveColors(&ctx)
+        if ready:
+            SoftRun(&ctx, SOFT_TASK_ESTIMATE_AND_COLOR, 0, 2, 0)
+            ready = ctx.colored
+    else:
+        ready = ready and SoftColorContacts(&ctx)
     SoftProfileMark(SOFT_STAGE_COLOR)
     if ready:
         SoftPrepareLanes(&ctx)
