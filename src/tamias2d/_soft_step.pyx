@@ -335,7 +335,8 @@ cdef enum:
     SOFT_STAGE_ARBITERS           # arbiters updated or made, begin / pre_solve
     SOFT_STAGE_COMPONENTS         # contact graph, sleeping, the arbiter cache's filter
     SOFT_STAGE_PREPARE            # bodies, joints and contacts gathered; contacts prepared into lanes
-    SOFT_STAGE_COLOR              # the constraint graph's colours (which lane slot each contact takes)
+    SOFT_STAGE_COLOR              # the constraint graph's colours (which lane slot each contact takes),
+                                  # and the load estimate where it runs beside them
     SOFT_STAGE_INTEGRATE          # velocities and positions, every substep
     SOFT_STAGE_WARM_START
     SOFT_STAGE_SOLVE              # the biased (soft) pass
