@@ -24,7 +24,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import tamias2d  # noqa: E402
 import hard_cases  # noqa: E402
 
-from harness import box2d_shape_def  # noqa: E402
+from harness import box2d_shape_def, largest_motion  # noqa: E402
 
 STEPS = 1800
 SCALE = 1.0 / 20.0
@@ -59,24 +59,9 @@ def box2d(count, inner, outer, friction):
     return (lambda: world.step(1.0 / 60.0, 4)), stones, SCALE
 
 
-def pose(body):
-    p = body.position
-    return (p[0], p[1]), body.angle
-
-
 def run(engine, count, inner, outer, friction):
     step, stones, scale = engine(count, inner, outer, friction)
-    home = [pose(b) for b in stones]
-    moved = turned = 0.0
-    for i in range(STEPS):
-        step()
-        if i % 10 == 9:
-            for b, (p, a) in zip(stones, home):
-                q, ang = pose(b)
-                moved = max(moved, math.dist(q, p) / scale)
-                turned = max(turned, abs(ang - a))
-            if moved > 10.0 * (outer - inner):
-                break       # fallen
+    moved, turned = largest_motion(step, stones, scale, STEPS, 10.0 * (outer - inner))
     return moved < 0.05 * (outer - inner) and turned < 0.02, moved, turned
 
 

@@ -25,7 +25,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import tamias2d  # noqa: E402
 import hard_cases  # noqa: E402
 
-from harness import box2d_shape_def  # noqa: E402
+from harness import box2d_shape_def, largest_motion  # noqa: E402
 
 STEPS = 600
 SCALE = 1.0 / 20.0
@@ -66,24 +66,9 @@ def box2d(lean, friction, pitch):
     return (lambda: world.step(1.0 / 60.0, 4)), cards, SCALE
 
 
-def pose(body):
-    p = body.position
-    return (p[0], p[1]), body.angle
-
-
 def run(engine, lean, friction, pitch):
     step, cards, scale = engine(lean, friction, pitch)
-    home = [pose(b) for b in cards]
-    moved = turned = 0.0
-    for i in range(STEPS):
-        step()
-        if i % 10 == 9:
-            for b, (p, a) in zip(cards, home):
-                q, ang = pose(b)
-                moved = max(moved, math.dist(q, p) / scale)
-                turned = max(turned, abs(ang - a))
-            if moved > LENGTH:
-                break       # fallen
+    moved, turned = largest_motion(step, cards, scale, STEPS, LENGTH)
     return moved < 0.05 * LENGTH and turned < 0.05, moved, turned
 
 

@@ -110,6 +110,31 @@ def same_state(a, b):
     return sa == sb
 
 
+def body_pose(body):
+    """((x, y), angle) of a tamias2d or pyb2d3 body."""
+    p = body.position
+    return (p[0], p[1]), body.angle
+
+
+def largest_motion(step, bodies, scale, steps, give_up):
+    """Call `step` `steps` times; every 10 steps note the largest move (in
+    the scene's units: divided by `scale`) and turn of any of `bodies` since
+    the start. Stops early once a move passes `give_up` (fallen).
+    Returns (largest move, largest turn)."""
+    home = [body_pose(b) for b in bodies]
+    moved = turned = 0.0
+    for i in range(steps):
+        step()
+        if i % 10 == 9:
+            for b, (p, a) in zip(bodies, home):
+                q, ang = body_pose(b)
+                moved = max(moved, math.dist(q, p) / scale)
+                turned = max(turned, abs(ang - a))
+            if moved > give_up:
+                break
+    return moved, turned
+
+
 def box2d_shape_def(b2, density=1.0, friction=None, restitution=None, group_index=None):
     """A pyb2d3 ``ShapeDef``. pyb2d3 hands out copies of a definition's
     material and filter, so each is changed and then set back."""
