@@ -24,7 +24,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import tamias2d  # noqa: E402
 import hard_cases  # noqa: E402
 
-from harness import box2d_shape_def, largest_motion  # noqa: E402
+from harness import box2d_hard_case_world, box2d_shape_def, largest_motion  # noqa: E402
 
 STEPS = 1800
 SCALE = 1.0 / 20.0
@@ -42,11 +42,7 @@ def tamias(solver, count, inner, outer, friction):
 
 def box2d(count, inner, outer, friction):
     import pyb2d3 as b2
-    world = b2.World(gravity=(0.0, -900.0 * SCALE))
-    world.sleeping_enabled = False
-    ground = world.create_static_body(position=(0.0, 0.0))
-    ground.create_polygon_shape(box2d_shape_def(b2, 1.0, friction),
-                                b2.box(2000.0 * SCALE, 5.0 * SCALE, center=(0.0, -5.0 * SCALE)))
+    world = box2d_hard_case_world(b2, SCALE, friction)
     stones = []
     for (cx, cy), verts in hard_cases.arch_blocks(count, inner, outer):
         pts = [(x * SCALE, y * SCALE) for x, y in verts]

@@ -25,7 +25,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import tamias2d  # noqa: E402
 import hard_cases  # noqa: E402
 
-from harness import box2d_shape_def, largest_motion  # noqa: E402
+from harness import box2d_hard_case_world, box2d_shape_def, largest_motion  # noqa: E402
 
 STEPS = 600
 SCALE = 1.0 / 20.0
@@ -47,12 +47,7 @@ def box2d(lean, friction, pitch):
     in tamias2d and each card's pose is copied, scaled."""
     import pyb2d3 as b2
     scene = hard_cases.build_card_house(tamias2d, lean=lean, pitch=pitch)
-    world = b2.World(gravity=(0.0, -900.0 * SCALE))
-    world.sleeping_enabled = False
-    ground = world.create_static_body(position=(0.0, 0.0))
-    # The hard cases' ground: a segment of radius 5 whose top is at y 0.
-    ground.create_polygon_shape(box2d_shape_def(b2, 1.0, friction),
-                                b2.box(2000.0 * SCALE, 5.0 * SCALE, center=(0.0, -5.0 * SCALE)))
+    world = box2d_hard_case_world(b2, SCALE, friction)
     cards = []
     for card in scene.watch["cards"]:
         body = world.create_dynamic_body(position=(card.position.x * SCALE,

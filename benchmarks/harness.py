@@ -110,6 +110,18 @@ def same_state(a, b):
     return sa == sb
 
 
+def box2d_hard_case_world(b2, scale, friction):
+    """A pyb2d3 world for a tests/hard_cases.py scene scaled by `scale`:
+    its gravity (900 down), sleeping off, and its ground (a static segment
+    of radius 5 whose top is at y 0) as a box of that friction."""
+    world = b2.World(gravity=(0.0, -900.0 * scale))
+    world.sleeping_enabled = False
+    ground = world.create_static_body(position=(0.0, 0.0))
+    ground.create_polygon_shape(box2d_shape_def(b2, 1.0, friction),
+                                b2.box(2000.0 * scale, 5.0 * scale, center=(0.0, -5.0 * scale)))
+    return world
+
+
 def body_pose(body):
     """((x, y), angle) of a tamias2d or pyb2d3 body."""
     p = body.position
