@@ -793,6 +793,11 @@ def main(argv=None):
         # solver's; the chipmunk solver steps on one thread regardless).
         from tamias2d import _soft_step
         _soft_step._threaded_min_contacts_set(0)
+    if args.seed % 2:
+        # The passes' fetches ahead, which a scene of the fuzzer's size
+        # would not make (SOFT_FETCH_MIN_CONTACTS): on odd seeds always.
+        from tamias2d import _soft_step
+        _soft_step._fetch_min_contacts_set(0)
     log = open(args.log, "w") if args.log else sys.stdout
     fz = (SleepFuzzer if args.mode == "sleep" else Fuzzer)(tamias2d, args.seed, log, args.solver,
                                                           args.threads)

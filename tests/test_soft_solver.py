@@ -1491,6 +1491,25 @@ def _persistence_toggled(sleep):
     return s
 
 
+@pytest.mark.parametrize("scene", ["add_remove", "sleepy_pile", "rain_persistence_1"])
+def test_fetching_ahead_changes_nothing(scene):
+    # The passes fetch what they will read a few items ahead only in scenes
+    # of SOFT_FETCH_MIN_CONTACTS contacts or more; the fetches must change
+    # no bits, so always fetching and never fetching end alike.
+    from tamias2d import _soft_step
+    build = _switch_scene(scene)
+    before = _soft_step._fetch_min_contacts_set(0)
+    try:
+        always = _state_after(build, 240)
+        _soft_step._fetch_min_contacts_set(10 ** 9)
+        never = _state_after(build, 240)
+    finally:
+        _soft_step._fetch_min_contacts_set(before)
+    assert len(always) == len(never)
+    for i, (a, n) in enumerate(zip(always, never)):
+        assert repr(a) == repr(n), f"body {i}: {a} != {n}"
+
+
 @pytest.mark.parametrize("scene", ["add_remove", "type_changes", "sleepy_pile",
                                    "rain_persistence_1", "rain_persistence_0"])
 def test_arbiter_guesses_change_nothing(scene):

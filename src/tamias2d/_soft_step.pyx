@@ -300,6 +300,7 @@ cdef struct SoftContext:
     cpFloat staticCompliance[2]   # the same of staticSoft
     SoftSoftness jointSoft    # the joints' position correction
     bint estimating           # SoftEstimateLoads runs this step (gravity, and on)
+    bint fetchAhead           # the passes fetch their records ahead (SOFT_FETCH_MIN_CONTACTS)
     bint estimatePending      # ... beside the colouring (SOFT_TASK_ESTIMATE_AND_COLOR)
     bint colored              # SoftColorContacts' answer, when run as that task
     cpFloat gravity           # |g|, and up (against it):
@@ -485,6 +486,13 @@ cdef enum:
     SOFT_NARROW_PREFETCH = 8
     SOFT_ARBITER_PREFETCH = 8     # the same for the passes over the arbiters
     SOFT_BODY_PREFETCH = 4        # and over the bodies
+    # Below this many contacts (last step's arbiters) a step's records stay
+    # in the core's caches and fetching them ahead only adds instructions:
+    # 4% of a 20-row pyramid's. Fetching on and off, alternated on one
+    # scene: 2% slower with it at 600 and 1,100 contacts, even at 1,300,
+    # 1-1.5% faster at 1,800-2,200, 10% at 2,800, 18% on Box2D's large
+    # pyramid (15,000).
+    SOFT_FETCH_MIN_CONTACTS = 1536
 
 # What the narrow phase found of a pair (SoftContext.touching), so that the
 # serial pass after it reads one byte per pair, not the pair's candidate.
@@ -529,7 +537,7 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef cpContact *dest
     for i in range(begin, end):
         p = &ctx.pairs[i]
-        if i + SOFT_NARROW_PREFETCH < end:
+        if ctx.fetchAhead and i + SOFT_NARROW_PREFETCH < end:
             # The broad phase's pair slots and the shapes are scattered in
             # memory: a cache miss each, which stalled this loop more than
             # the collision itself took.
@@ -537,7 +545,7 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
             tamias_prefetch(q.slot)
             SoftFetchShape(q.a)
             SoftFetchShape(q.b)
-        if i + SOFT_NARROW_PREFETCH // 2 < end:
+        if ctx.fetchAhead and i + SOFT_NARROW_PREFETCH // 2 < end:
             # The arbiter its slot guesses, now that the slot has arrived.
             q = &ctx.pairs[i + SOFT_NARROW_PREFETCH // 2]
             if q.slot != NULL and q.slot.arbiter != NULL:
@@ -647,9 +655,9 @@ cdef void SoftUpdateShapes(SoftContext *ctx, int begin, int end) noexcept nogil:
         # line with its shape list two bodies ahead of its first shape's
         # lines (all of a polygon's: its local planes are read, its world
         # planes written).
-        if i + 2 * SOFT_BODY_PREFETCH < end:
+        if ctx.fetchAhead and i + 2 * SOFT_BODY_PREFETCH < end:
             tamias_prefetch(&(<cpBody *>bodies.arr[i + 2 * SOFT_BODY_PREFETCH]).shapeList)
-        if i + SOFT_BODY_PREFETCH < end:
+        if ctx.fetchAhead and i + SOFT_BODY_PREFETCH < end:
             shape = (<cpBody *>bodies.arr[i + SOFT_BODY_PREFETCH]).shapeList
             if shape != NULL:
                 SoftFetchLines(shape, sizeof(cpPolyShape))
@@ -925,7 +933,7 @@ cdef void SoftMarkThreaded(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef cpArbiter *arb
     cdef int i
     for i in range(begin, end):
-        if i + SOFT_ARBITER_PREFETCH < end:
+        if ctx.fetchAhead and i + SOFT_ARBITER_PREFETCH < end:
             tamias_prefetch_write(&(<cpArbiter *>arbiters.arr[i + SOFT_ARBITER_PREFETCH]).state)
         arb = <cpArbiter *>arbiters.arr[i]
         if not arb.cached:
@@ -1044,7 +1052,7 @@ cdef void SoftGatherRange(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef SoftState *st
     cdef cpBody *body
     for i in range(begin, end):
-        if i + SOFT_BODY_PREFETCH < end:
+        if ctx.fetchAhead and i + SOFT_BODY_PREFETCH < end:
             # (Each body lives in its Python object, scattered.)
             SoftFetchLines(arr.arr[i - 1 + SOFT_BODY_PREFETCH], sizeof(cpBody))
         body = <cpBody *>arr.arr[i - 1]
@@ -1688,10 +1696,10 @@ cdef void SoftCountRange(SoftContext *ctx, int begin, int end, bint atomic) noex
     cdef cpArbiter *arb
     cdef int i
     for i in range(begin, end):
-        if i + SOFT_ARBITER_PREFETCH < end:
+        if ctx.fetchAhead and i + SOFT_ARBITER_PREFETCH < end:
             # (Arbiters are scattered: a cache miss each otherwise.)
             SoftFetchLines(arbiters.arr[i + SOFT_ARBITER_PREFETCH], sizeof(cpArbiter))
-        if i + SOFT_ARBITER_PREFETCH // 2 < end:
+        if ctx.fetchAhead and i + SOFT_ARBITER_PREFETCH // 2 < end:
             # Its contacts, now that the arbiter itself has been fetched
             # (SoftContactKind reads both of a two-point manifold's).
             arb = <cpArbiter *>arbiters.arr[i + SOFT_ARBITER_PREFETCH // 2]
@@ -2052,19 +2060,19 @@ cdef void SoftPackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef SoftContact *sc
     cdef bint keep = tamias_load(&ctx.elastic) != 0
     for i in range(begin, end):
-        if i + SOFT_ARBITER_PREFETCH < end:
+        if ctx.fetchAhead and i + SOFT_ARBITER_PREFETCH < end:
             # (Up to its state: the handlers and stamps after it are not
             # read.)
             arb = <cpArbiter *>arbiters.arr[ctx.contactSource[i + SOFT_ARBITER_PREFETCH]]
             SoftFetchLines(arb, <char *>&arb.state - <char *>arb + sizeof(arb.state))
-        if i + SOFT_ARBITER_PREFETCH // 2 < end:
+        if ctx.fetchAhead and i + SOFT_ARBITER_PREFETCH // 2 < end:
             # Its contacts, now that the arbiter itself has been fetched,
             # and its bodies' slots in the arrays of the step's bodies.
             arb = <cpArbiter *>arbiters.arr[ctx.contactSource[i + SOFT_ARBITER_PREFETCH // 2]]
             SoftFetchLines(arb.contacts, arb.count * sizeof(cpContact))
             SoftFetchSlot(ctx, ctx.colorKeys[i + SOFT_ARBITER_PREFETCH // 2].ia)
             SoftFetchSlot(ctx, ctx.colorKeys[i + SOFT_ARBITER_PREFETCH // 2].ib)
-        if i + SOFT_ARBITER_PREFETCH < end:
+        if ctx.fetchAhead and i + SOFT_ARBITER_PREFETCH < end:
             # A lane about to take its first contact: all of its lines (a
             # lane is filled over a stretch of contacts, but each contact
             # writes to every line of it), for writing.
@@ -2878,7 +2886,7 @@ cdef void SoftUnpackLanes(SoftContext *ctx, int begin, int end, bint store) noex
     for i in range(begin, end):
         ln = &ctx.lanes[i]
         links = &ctx.laneLinks[i]
-        if store and i + 1 < end:
+        if ctx.fetchAhead and store and i + 1 < end:
             # The next lane's arbiters' contacts (scattered in memory).
             for k in range(SOFT_LANES):
                 if links[1].src[k] >= 0:
@@ -3130,7 +3138,7 @@ cdef void SoftFinishBodies(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef SoftState *st
     cdef cpBody *body
     for i in range(begin, end):
-        if i + SOFT_BODY_PREFETCH < end:
+        if ctx.fetchAhead and i + SOFT_BODY_PREFETCH < end:
             SoftFetchLines(ctx.bodies[i + SOFT_BODY_PREFETCH].body, sizeof(cpBody))
         sb = &ctx.bodies[i]
         st = &ctx.states[i]
@@ -3353,6 +3361,10 @@ cdef void SoftWorkerMain(void *arg) noexcept nogil:
                     _pool.diag.epa_iter = d.epa_iter
         tamias_add(&_pool.inside, -1)
 
+# SOFT_FETCH_MIN_CONTACTS, but for tests, which check that fetching ahead
+# changes no bits, and measurements (_fetch_min_contacts_set).
+cdef int _fetch_min_contacts = SOFT_FETCH_MIN_CONTACTS
+
 # SOFT_THREADED_MIN_CONTACTS, but for tests and the fuzzer, which run small
 # scenes on the pool (_threaded_min_contacts_set).
 cdef int _threaded_min_contacts = SOFT_THREADED_MIN_CONTACTS
@@ -3453,7 +3465,9 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     space.collideMargin = SoftSpeculative(space)
 
     SoftProfileMark(-1)
-    # (Last step's contact count decides whether this one is threaded.)
+    # (Last step's contact count decides whether this one is threaded, and
+    # whether its passes fetch ahead.)
+    ctx.fetchAhead = space.arbiters.num >= _fetch_min_contacts
     ctx.threaded = SoftPoolAcquire(space)
     SoftResetArbiters(&ctx)
     cpSpaceLock(space)
@@ -3584,6 +3598,18 @@ def _mass_ratio_blocks(on=None):
     if on is not None:
         _use_blocks = bool(on)
     return bool(_use_blocks)
+
+def _fetch_min_contacts_set(count=None):
+    """The fewest arbiters (last step's) with which the soft step's passes
+    fetch the records they will read a few items ahead (and, given `count`,
+    set it first: 0 always, a huge number never). Returns the value before."""
+    global _fetch_min_contacts
+    before = _fetch_min_contacts
+    if count is not None:
+        if count < 0:
+            raise ValueError("count must be >= 0")
+        _fetch_min_contacts = count
+    return before
 
 def _threaded_min_contacts_set(count=None):
     """The fewest arbiters (last step's) a threaded space's soft step needs
