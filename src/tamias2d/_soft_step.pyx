@@ -3462,6 +3462,8 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     ctx.upx = -ctx.gx / ctx.gravity if ctx.estimating else 0.0
     ctx.upy = -ctx.gy / ctx.gravity if ctx.estimating else 0.0
     ctx.loadEstimates = NULL
+    ctx.estimatePending = 0
+    ctx.colored = 0
     space.collideMargin = SoftSpeculative(space)
 
     SoftProfileMark(-1)
