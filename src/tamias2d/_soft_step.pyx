@@ -148,7 +148,7 @@ cdef enum:
     SOFT_SCRATCH_THREADED     # last step's arbiters, still threaded (SoftResetArbiters)
     SOFT_SCRATCH_MOTION       # SoftMotion of each body slot
     SOFT_SCRATCH_LANE_LINKS   # SoftLaneLinks of each lane
-    SOFT_SCRATCH_CHANGED_IN   # the restitution pass that last changed each body
+    SOFT_SCRATCH_CHANGED_IN   # the restitution pass that last changed each body, then the contacts that can bounce
     SOFT_SCRATCH_DESTINATIONS # where each pair's contacts go in the contact buffers (SoftCollide)
     SOFT_SCRATCH_PAIR_ARBITERS  # each updated pair's arbiter, packed (SoftCollide)
     SOFT_SCRATCH_BLOCKS       # the light bodies and their contacts (SoftFindBlocks)
@@ -2932,16 +2932,19 @@ cdef void SoftApplyRestitution(SoftContext *ctx) noexcept nogil:
     # they push, never pull. (Points that were separating stay out: where a
     # ball already overlapped both a wall and its neighbour, pushing them
     # doubled the energy.)
-    cdef int i, j, k
+    cdef int i, j, k, n
     cdef SoftContact *sc
     cdef SoftPoint *sp
     cdef SoftState *sa
     cdef SoftState *sb
     cdef cpFloat nx, ny, e, vn, imp, newImp, target
     cdef cpFloat largest = 0.0     # the largest bounce speed of the step
+    cdef cpFloat restingSpeed
     cdef bint changed = 1
-    cdef bint resting
+    cdef bint resting, member
     cdef int *changedIn
+    cdef int *members
+    cdef int memberCount = 0
     for i in range(ctx.contactCount):
         sc = &ctx.contacts[i]
         for j in range(sc.count):
@@ -2950,20 +2953,29 @@ cdef void SoftApplyRestitution(SoftContext *ctx) noexcept nogil:
                 largest = sc.restitution * -sp.relativeVelocity
     if largest == 0.0:
         return
+    restingSpeed = SOFT_RESTING_FRACTION * largest
     # From the third pass on, a contact neither of whose bodies changed
     # since the start of the last pass is passed over: it would compute
     # what it did then, and then it changed nothing. (The first two passes
-    # differ in what they do with resting points.) Without the array (out
-    # of memory) every contact is visited: the same bits.
-    changedIn = <int *>_reserve(ctx.space, SOFT_SCRATCH_CHANGED_IN, ctx.bodyCount, sizeof(int))
+    # differ in what they do with resting points.) And the passes after the
+    # first visit only the contacts the first found a point of that could
+    # act (loaded, elastic, approaching or at rest): in a pile most are
+    # neither, and a long rain made up to ten passes over all of them.
+    # Without the arrays (out of memory) every contact is visited: the same
+    # bits.
+    changedIn = <int *>_reserve(ctx.space, SOFT_SCRATCH_CHANGED_IN,
+                                ctx.bodyCount + ctx.contactCount, sizeof(int))
+    members = NULL
     if changedIn != NULL:
+        members = changedIn + ctx.bodyCount
         for i in range(ctx.bodyCount):
             changedIn[i] = -1
     k = 0
     while changed and k < SOFT_RESTITUTION_PASSES:
         changed = 0
-        for i in range(ctx.contactCount):
-            sc = &ctx.contacts[i]
+        n = memberCount if k > 0 and members != NULL else ctx.contactCount
+        for i in range(n):
+            sc = &ctx.contacts[members[i] if k > 0 and members != NULL else i]
             e = sc.restitution
             if e == 0.0:
                 continue
@@ -2974,16 +2986,19 @@ cdef void SoftApplyRestitution(SoftContext *ctx) noexcept nogil:
             sb = &ctx.states[sc.ib]
             nx = sc.nx
             ny = sc.ny
+            member = 0
             for j in range(sc.count):
                 sp = &sc.p[j]
                 if sp.maxNormalImpulse == 0.0:
                     continue
-                resting = fabs(sp.relativeVelocity) <= SOFT_RESTING_FRACTION * largest
+                resting = fabs(sp.relativeVelocity) <= restingSpeed
                 if resting:
+                    member = 1
                     if k == 0:
                         continue
                     target = 0.0
                 elif sp.relativeVelocity < 0.0:
+                    member = 1
                     target = -e * sp.relativeVelocity
                 else:
                     continue
@@ -3014,6 +3029,9 @@ cdef void SoftApplyRestitution(SoftContext *ctx) noexcept nogil:
                         changedIn[sc.ia] = k
                     if sc.ib != 0:
                         changedIn[sc.ib] = k
+            if k == 0 and member and members != NULL:
+                members[memberCount] = i
+                memberCount += 1
         k += 1
 
 cdef void SoftStoreImpulses(SoftContext *ctx, int begin, int end) noexcept nogil:
