@@ -148,7 +148,7 @@ cdef enum:
     SOFT_SCRATCH_THREADED     # last step's arbiters, still threaded (SoftResetArbiters)
     SOFT_SCRATCH_MOTION       # SoftMotion of each body slot
     SOFT_SCRATCH_LANE_LINKS   # SoftLaneLinks of each lane
-    SOFT_SCRATCH_CHANGED_IN   # the restitution pass that last changed each body, then the contacts that can bounce
+    SOFT_SCRATCH_CHANGED_IN   # restitution: the pass that last changed each body, which bounced, the contacts of the later passes
     SOFT_SCRATCH_DESTINATIONS # where each pair's contacts go in the contact buffers (SoftCollide)
     SOFT_SCRATCH_PAIR_ARBITERS  # each updated pair's arbiter, packed (SoftCollide)
     SOFT_SCRATCH_BLOCKS       # the light bodies and their contacts (SoftFindBlocks)
@@ -2917,88 +2917,123 @@ cdef void SoftStoreOverflow(SoftContext *ctx) noexcept nogil:
     for i in range(ctx.overflowCount):
         SoftStoreImpulses(ctx, ctx.overflow[i], ctx.overflow[i] + 1)
 
+cdef inline bint SoftFallsFreely(SoftContext *ctx, int slot) noexcept nogil:
+    # A dynamic body that the space's gravity accelerates (its default
+    # velocity function).
+    return (ctx.bodies[slot].flags & (SOFT_BODY_DEFAULT_VELOCITY | SOFT_BODY_KINEMATIC)
+            == SOFT_BODY_DEFAULT_VELOCITY)
+
+cdef inline cpFloat SoftRestingSpeed(SoftContext *ctx, SoftContact *sc, cpFloat fraction,
+                                     cpFloat gravityStep) noexcept nogil:
+    # The approach speed up to which a point of sc counts as at rest: a
+    # small fraction of the step's largest bounce, and for a body under
+    # gravity, the speed gravity gives it in one step.
+    if gravityStep > fraction and (SoftFallsFreely(ctx, sc.ia) or SoftFallsFreely(ctx, sc.ib)):
+        return gravityStep
+    return fraction
+
 cdef void SoftApplyRestitution(SoftContext *ctx) noexcept nogil:
     # After the substeps: points that were approaching at the step's start
-    # and took an impulse get e times that approach speed back. No threshold:
-    # Chipmunk bounces at any speed. Box2D makes one pass; where bounces are
-    # coupled one pass loses energy: three balls meeting (an elastic gas of
-    # 20 balls kept 26% of its energy over 100,000 steps), or a ball resting
-    # on a wall struck by another (half the energy: the resting contact was
-    # not approaching, so took no part, and the struck ball's bounce drove it
-    # into the wall). So further passes follow while a pass still changes
-    # something, at most SOFT_RESTITUTION_PASSES, and in them the loaded
-    # points that were at rest (an approach speed within
-    # SOFT_RESTING_FRACTION of the step's largest bounce) keep from closing;
-    # they push, never pull. (Points that were separating stay out: where a
-    # ball already overlapped both a wall and its neighbour, pushing them
-    # doubled the energy.)
-    cdef int i, j, k, n
+    # and took an impulse get e times that approach speed back.
+    #
+    # Box2D makes one pass; where bounces are coupled one pass loses energy:
+    # three balls meeting (an elastic gas of 20 balls kept 26% of its energy
+    # over 100,000 steps), or a ball resting on a wall struck by another
+    # (half the energy: the resting contact was not approaching, so took no
+    # part, and the struck ball's bounce drove it into the wall). So further
+    # passes follow while a pass still changes something, at most
+    # SOFT_RESTITUTION_PASSES, and in them the loaded points that were at
+    # rest keep from closing; they push, never pull. (Points that were
+    # separating stay out: where a ball already overlapped both a wall and
+    # its neighbour, pushing them doubled the energy.)
+    #
+    # At rest means approaching no faster than SOFT_RESTING_FRACTION of the
+    # step's largest bounce, or, where a body falls under gravity, than the
+    # speed gravity gives it in one step (Box2D's restitution threshold, in
+    # the scene's units): such a bounce is spent within the step, and where
+    # it counted, a pile of slightly elastic bodies had every contact
+    # bouncing, and the passes became ten more relax passes over the whole
+    # pile (a rain of circles of elasticity 0.1 ran ten passes almost every
+    # step). Only the resting points next to a bounce (of a body that took
+    # one in the first pass) take part in the later passes.
+    cdef int i, j, k, n, c
     cdef SoftContact *sc
     cdef SoftPoint *sp
     cdef SoftState *sa
     cdef SoftState *sb
-    cdef cpFloat nx, ny, e, vn, imp, newImp, target
+    cdef cpFloat nx, ny, e, vn, imp, newImp, target, restingSpeed
     cdef cpFloat largest = 0.0     # the largest bounce speed of the step
-    cdef cpFloat restingSpeed
+    cdef cpFloat fraction
+    cdef cpFloat gravityStep = ctx.gravity * ctx.h * ctx.substeps
     cdef bint changed = 1
-    cdef bint resting, member
+    cdef bint resting, bounces, rests
     cdef int *changedIn
     cdef int *members
+    cdef int *bounced
     cdef int memberCount = 0
+    if not gravityStep < INFINITY:
+        gravityStep = 0.0
     for i in range(ctx.contactCount):
         sc = &ctx.contacts[i]
+        if sc.restitution == 0.0:
+            continue
+        restingSpeed = SoftRestingSpeed(ctx, sc, 0.0, gravityStep)
         for j in range(sc.count):
             sp = &sc.p[j]
-            if sc.restitution * -sp.relativeVelocity > largest and sp.maxNormalImpulse != 0.0:
+            if (sc.restitution * -sp.relativeVelocity > largest and sp.maxNormalImpulse != 0.0
+                    and -sp.relativeVelocity > restingSpeed):
                 largest = sc.restitution * -sp.relativeVelocity
     if largest == 0.0:
         return
-    restingSpeed = SOFT_RESTING_FRACTION * largest
-    # From the third pass on, a contact neither of whose bodies changed
-    # since the start of the last pass is passed over: it would compute
-    # what it did then, and then it changed nothing. (The first two passes
-    # differ in what they do with resting points.) And the passes after the
-    # first visit only the contacts the first found a point of that could
-    # act (loaded, elastic, approaching or at rest): in a pile most are
-    # neither, and a long rain made up to ten passes over all of them.
-    # Without the arrays (out of memory) every contact is visited: the same
-    # bits.
+    fraction = SOFT_RESTING_FRACTION * largest
+    # The first pass visits every elastic contact; the later ones the
+    # contacts with a bounce, and those with a resting point on a body that
+    # bounced (`bounced`), in their order. From the third pass on, a contact
+    # neither of whose bodies changed since the start of the last pass is
+    # passed over: it would compute what it did then, and then it changed
+    # nothing. (The first two passes differ in what they do with resting
+    # points.) Without the arrays (out of memory) every contact is visited
+    # in every pass.
     changedIn = <int *>_reserve(ctx.space, SOFT_SCRATCH_CHANGED_IN,
-                                ctx.bodyCount + ctx.contactCount, sizeof(int))
-    members = NULL
+                                2 * ctx.bodyCount + ctx.contactCount, sizeof(int))
+    members = bounced = NULL
     if changedIn != NULL:
-        members = changedIn + ctx.bodyCount
+        bounced = changedIn + ctx.bodyCount
+        members = bounced + ctx.bodyCount
         for i in range(ctx.bodyCount):
             changedIn[i] = -1
+            bounced[i] = 0
     k = 0
     while changed and k < SOFT_RESTITUTION_PASSES:
         changed = 0
         n = memberCount if k > 0 and members != NULL else ctx.contactCount
-        for i in range(n):
-            sc = &ctx.contacts[members[i] if k > 0 and members != NULL else i]
+        for c in range(n):
+            i = members[c] if k > 0 and members != NULL else c
+            sc = &ctx.contacts[i]
             e = sc.restitution
             if e == 0.0:
                 continue
             if k >= 2 and changedIn != NULL and (changedIn[sc.ia] < k - 1
                                                  and changedIn[sc.ib] < k - 1):
                 continue
+            restingSpeed = SoftRestingSpeed(ctx, sc, fraction, gravityStep)
             sa = &ctx.states[sc.ia]
             sb = &ctx.states[sc.ib]
             nx = sc.nx
             ny = sc.ny
-            member = 0
+            bounces = rests = 0
             for j in range(sc.count):
                 sp = &sc.p[j]
                 if sp.maxNormalImpulse == 0.0:
                     continue
                 resting = fabs(sp.relativeVelocity) <= restingSpeed
                 if resting:
-                    member = 1
+                    rests = 1
                     if k == 0:
                         continue
                     target = 0.0
                 elif sp.relativeVelocity < 0.0:
-                    member = 1
+                    bounces = 1
                     target = -e * sp.relativeVelocity
                 else:
                     continue
@@ -3029,9 +3064,29 @@ cdef void SoftApplyRestitution(SoftContext *ctx) noexcept nogil:
                         changedIn[sc.ia] = k
                     if sc.ib != 0:
                         changedIn[sc.ib] = k
-            if k == 0 and member and members != NULL:
-                members[memberCount] = i
+            if k == 0 and members != NULL and (bounces or rests):
+                # A candidate for the later passes: -(i + 1) if it bounces.
+                members[memberCount] = -(i + 1) if bounces else i
                 memberCount += 1
+                if bounces:
+                    # (Slot 0, the static and sleeping bodies', is not
+                    # marked: a pile's every contact with the ground would
+                    # come in.)
+                    if sc.ia != 0:
+                        bounced[sc.ia] = 1
+                    if sc.ib != 0:
+                        bounced[sc.ib] = 1
+        if k == 0 and members != NULL:
+            n = 0
+            for c in range(memberCount):
+                i = members[c]
+                if i < 0:
+                    members[n] = -i - 1
+                    n += 1
+                elif bounced[ctx.contacts[i].ia] or bounced[ctx.contacts[i].ib]:
+                    members[n] = i
+                    n += 1
+            memberCount = n
         k += 1
 
 cdef void SoftStoreImpulses(SoftContext *ctx, int begin, int end) noexcept nogil:

@@ -1127,6 +1127,11 @@ cdef class Space:
         ``Constraint.impulse`` after a step is the last substep's impulse
         times ``substeps``.
 
+        In the soft solver, bodies that meet more slowly than gravity makes
+        a body fall in one step (``gravity.length * dt``) do not bounce, as
+        under Box2D's restitution threshold, where one of them falls under
+        the space's gravity (its default ``velocity_func``).
+
         >>> import tamias2d
         >>> tamias2d.Space().solver
         'chipmunk'
