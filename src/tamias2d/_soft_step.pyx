@@ -2100,8 +2100,9 @@ cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, SoftLaneLinks *links, in
     cdef int j
     ln.ia[k] = sc.ia
     ln.ib[k] = sc.ib
-    ln.wa[k] = SoftMovable(ctx, sc.ia)
-    ln.wb[k] = SoftMovable(ctx, sc.ib)
+    # (The count found which bodies are movable: SoftCountContact.)
+    ln.wa[k] = ctx.colorKeys[i].a != 0
+    ln.wb[k] = ctx.colorKeys[i].b != 0
     links.src[k] = i
     links.dst[k] = sc.dst
     ln.iA[k] = a.i_inv
