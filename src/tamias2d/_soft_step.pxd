@@ -70,7 +70,8 @@ cdef enum:
 cdef const cpFloat SOFT_RESTITUTION_TOLERANCE = 1e-6
 # A point whose approach speed is within this fraction of the step's
 # largest bounce was at rest (resting contacts keep from closing in the
-# restitution passes).
+# restitution passes); so was one within the speed gravity gives a body in
+# one step, where a body falls under it (SoftRestingSpeed).
 cdef const cpFloat SOFT_RESTING_FRACTION = 1e-3
 # A loaded contact point is preloaded: its soft spring holds this fraction of
 # its (filtered) load at no depth (SoftPreload) in a chain, where both bodies
