@@ -394,32 +394,37 @@ def _profile(on):
 # same whoever ran which pair. A begin or pre-solve callback therefore sees
 # every pair's narrow phase done.
 
+cdef void SoftGrowPairs(SoftContext *ctx) noexcept nogil:
+    # Room for the next pair (SoftCollectPair), or the out-of-memory flag up.
+    cdef SoftPair *grown = <SoftPair *>_reserve(ctx.space, SOFT_SCRATCH_PAIRS, ctx.pairCount + 1,
+                                                sizeof(SoftPair))
+    if grown != NULL:
+        ctx.pairs = grown
+        ctx.pairCap = ctx.space.softScratch.cap[SOFT_SCRATCH_PAIRS]
+
 cdef void SoftCollectPair(void *a, void *b, cpPairSlot *slot, void *data) noexcept nogil:
     # A pair of the walk, for the narrow phase. The pairs are kept for the
     # next steps while every pair has its slot (pairs new this step have
-    # none) and no allocation failed.
+    # none) and no allocation failed. There is always room for the next
+    # pair (the array grows after the pair that fills it, when nothing else
+    # is held in registers: this runs for every pair), but after a failed
+    # allocation: then the pair is skipped (the flag is up).
     cdef SoftContext *ctx = <SoftContext *>data
     cdef SoftPair *pair
-    cdef SoftPair *grown
     cdef int n = ctx.pairCount
-    if slot == NULL:
+    if slot == NULL or n >= ctx.pairCap:
         ctx.keepingPairs = 0
-    if n >= ctx.pairCap:
-        grown = <SoftPair *>_reserve(ctx.space, SOFT_SCRATCH_PAIRS, n + 1, sizeof(SoftPair))
-        if grown == NULL:
-            # Out of memory: the flag is up, the pair is skipped (the pairs
-            # so far stay where they were).
-            ctx.keepingPairs = 0
+        if n >= ctx.pairCap:
             return
-        ctx.pairs = grown
-        ctx.pairCap = ctx.space.softScratch.cap[SOFT_SCRATCH_PAIRS]
     pair = &ctx.pairs[n]
     pair.a = <cpShape *>a
     pair.b = <cpShape *>b
     pair.slot = slot
     ctx.pairCount = n + 1
+    if n + 1 == ctx.pairCap:
+        SoftGrowPairs(ctx)
 
-# Off only in tests, which check that the guesses change nothing.
+
 cdef bint _use_guesses = 1
 # The same for keeping the broad phase's walk.
 cdef bint _keep_pairs = 1
@@ -708,8 +713,10 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     SoftRun(ctx, SOFT_TASK_UPDATE_SHAPES, 0, space.dynamicBodies.num, 0)
     if tamias_load(&ctx.shapesUpdated) != cpSpatialIndexCount(space.dynamicShapes):
         cpSpatialIndexEach(space.dynamicShapes, cpShapeUpdateFunc, NULL)
-    ctx.pairs = <SoftPair *>space.softScratch.buf[SOFT_SCRATCH_PAIRS]
-    ctx.pairCap = space.softScratch.cap[SOFT_SCRATCH_PAIRS]
+    # (Room for one pair at least: SoftCollectPair grows the array after a
+    # pair fills it.)
+    ctx.pairs = <SoftPair *>_reserve(space, SOFT_SCRATCH_PAIRS, 1, sizeof(SoftPair))
+    ctx.pairCap = space.softScratch.cap[SOFT_SCRATCH_PAIRS] if ctx.pairs != NULL else 0
     ctx.pairCount = 0
     ctx.updateInNarrow = not cpSpaceHasHandlers(space, 1, 1, 0)
     # The last walk of the tree's pairs is kept: while no leaf leaves its
