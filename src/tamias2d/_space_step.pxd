@@ -21,6 +21,12 @@ from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArray, cpContact, cp
     cpArbiter, cpContactBufferHeader,
     cpPostStepCallback, cpPostStepFunc, CP_BODY_TYPE_DYNAMIC)
 from tamias2d.body cimport cpBodyGetType
+from libc.math cimport sqrt, fmax
+from tamias2d._structs cimport cpConstraint
+from tamias2d.vector cimport cpVect, cpBB, cpvsub, cpvlengthsq
+from tamias2d.shape cimport cpShapeFilterReject
+from tamias2d._bbtree cimport cpBBTreeGetStaticReach
+from tamias2d._private cimport cpConstraintNext
 
 # -- locking and post-step callbacks ---------------------------------------------------
 cdef void cpSpaceLock(cpSpace *space) noexcept nogil
@@ -72,7 +78,7 @@ cdef cpCollisionID cpSpaceCollideShapes(void *a, void *b, cpCollisionID id, void
 # cpSpaceCollideShapes in parts, for a narrow phase run apart (the soft
 # solver's, on several threads): the rejection test and the pair's margin,
 # then (the contacts on the contact buffer) arbiter, callbacks, this step's list.
-cdef cpBool cpSpaceRejectPair(cpSpace *space, cpShape *a, cpShape *b, cpFloat *margin) noexcept nogil
+# (Inline, below: the soft step calls it for every pair of the broad phase.)
 cdef cpArbiter *cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
                                        cpCollisionInfo *info, cpArbiter *found,
                                        bint updated, int solid) noexcept nogil
@@ -85,6 +91,66 @@ cdef bint cpSpaceHasHandlers(cpSpace *space, bint begin, bint preSolve,
 cdef cpBool cpSpaceArbiterSetFilter(void *arb, void *space) noexcept nogil
 # cpShapeCacheBB as a spatial-index iterator.
 cdef void cpShapeUpdateFunc(void *shape, void *unused) noexcept nogil
+
+# -- the rejection of a pair (inline) ------------------------------------------------------
+cdef inline cpBool QueryRejectConstraint(cpBody *a, cpBody *b) noexcept nogil:
+    cdef cpConstraint *constraint = a.constraintList
+    while constraint != NULL:
+        if (not constraint.collideBodies and (
+                (constraint.a == a and constraint.b == b)
+                or (constraint.a == b and constraint.b == a))):
+            return 1
+        constraint = cpConstraintNext(constraint, a)
+    return 0
+
+# The boxes are compared `margin` apart (the soft solver's speculative
+# distance; 0 in the chipmunk solver, where b + 0.0 is b and the test is
+# Munk2D's).
+cdef inline cpBool BBsWithin(cpBB a, cpBB b, cpFloat margin) noexcept nogil:
+    return (a.l <= b.r + margin and b.l <= a.r + margin
+            and a.b <= b.t + margin and b.b <= a.t + margin)
+
+cdef inline cpBool QueryReject(cpShape *a, cpShape *b, cpFloat margin) noexcept nogil:
+    return (not BBsWithin(a.bb, b.bb, margin)
+            or a.body == b.body
+            or cpShapeFilterReject(a.filter, b.filter)
+            or QueryRejectConstraint(a.body, b.body))
+
+# The margin of a pair (the soft solver's speculative distance, plus, for
+# continuous collision, how far the pair closes in this step) and whether
+# the broad phase's pair is rejected before the narrow phase.
+cdef inline cpBool cpSpaceRejectPair(cpSpace *space, cpShape *a, cpShape *b,
+                                     cpFloat *margin_out) noexcept nogil:
+    cdef cpFloat margin = space.collideMargin
+    cdef cpVect dv
+    cdef cpFloat closing
+    cdef bint widened
+    margin_out[0] = margin
+    if margin == 0.0:
+        return QueryReject(a, b, margin)
+    widened = (a.body.m_inv == 0.0 or b.body.m_inv == 0.0
+               or a.body.isBullet or b.body.isBullet)
+    if not widened and not BBsWithin(a.bb, b.bb, margin):
+        return 1    # (most pairs of a falling pile: their tree boxes reach ahead)
+    if widened:
+        # The soft solver's continuous collision: against static and
+        # kinematic shapes (and for bullets, against anything) the
+        # speculative contact also reaches as far as the pair closes in
+        # this step, so a fast body stops at the surface instead of passing
+        # through. Between two plain dynamic bodies the speculative distance
+        # alone, as Box2D: the broad phase and the narrow phase stay cheap
+        # in piles.
+        dv = cpvsub(b.body.v, a.body.v)
+        closing = sqrt(cpvlengthsq(dv)) * space.curr_dt
+        if a.body.m_inv == 0.0 or b.body.m_inv == 0.0:
+            # At least the tree's static reach (the fastest body's travel,
+            # with room): a body at rest may be knocked toward a wall
+            # within the step.
+            closing = fmax(closing, cpBBTreeGetStaticReach(space.dynamicShapes))
+        margin += closing
+    margin_out[0] = margin
+    return QueryReject(a, b, margin)
+
 
 # -- components and sleeping ----------------------------------------------------------------
 cdef void cpSpaceActivateBody(cpSpace *space, cpBody *body) noexcept nogil

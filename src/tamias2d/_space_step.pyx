@@ -194,64 +194,6 @@ cdef void *cpSpaceArbiterSetTrans(const void *ptr, void *data) noexcept nogil:
             return NULL
     return cpArbiterInit(<cpArbiter *>cpArrayPop(space.pooledArbiters), shapes[0], shapes[1])
 
-cdef inline cpBool QueryRejectConstraint(cpBody *a, cpBody *b) noexcept nogil:
-    cdef cpConstraint *constraint = a.constraintList
-    while constraint != NULL:
-        if (not constraint.collideBodies and (
-                (constraint.a == a and constraint.b == b)
-                or (constraint.a == b and constraint.b == a))):
-            return 1
-        constraint = cpConstraintNext(constraint, a)
-    return 0
-
-# The boxes are compared `margin` apart (the soft solver's speculative
-# distance; 0 in the chipmunk solver, where b + 0.0 is b and the test is
-# Munk2D's).
-cdef inline cpBool BBsWithin(cpBB a, cpBB b, cpFloat margin) noexcept nogil:
-    return (a.l <= b.r + margin and b.l <= a.r + margin
-            and a.b <= b.t + margin and b.b <= a.t + margin)
-
-cdef inline cpBool QueryReject(cpShape *a, cpShape *b, cpFloat margin) noexcept nogil:
-    return (not BBsWithin(a.bb, b.bb, margin)
-            or a.body == b.body
-            or cpShapeFilterReject(a.filter, b.filter)
-            or QueryRejectConstraint(a.body, b.body))
-
-# The margin of a pair (the soft solver's speculative distance, plus, for
-# continuous collision, how far the pair closes in this step) and whether
-# the broad phase's pair is rejected before the narrow phase.
-cdef cpBool cpSpaceRejectPair(cpSpace *space, cpShape *a, cpShape *b,
-                              cpFloat *margin_out) noexcept nogil:
-    cdef cpFloat margin = space.collideMargin
-    cdef cpVect dv
-    cdef cpFloat closing
-    cdef bint widened
-    margin_out[0] = margin
-    if margin == 0.0:
-        return QueryReject(a, b, margin)
-    widened = (a.body.m_inv == 0.0 or b.body.m_inv == 0.0
-               or a.body.isBullet or b.body.isBullet)
-    if not widened and not BBsWithin(a.bb, b.bb, margin):
-        return 1    # (most pairs of a falling pile: their tree boxes reach ahead)
-    if widened:
-        # The soft solver's continuous collision: against static and
-        # kinematic shapes (and for bullets, against anything) the
-        # speculative contact also reaches as far as the pair closes in
-        # this step, so a fast body stops at the surface instead of passing
-        # through. Between two plain dynamic bodies the speculative distance
-        # alone, as Box2D: the broad phase and the narrow phase stay cheap
-        # in piles.
-        dv = cpvsub(b.body.v, a.body.v)
-        closing = sqrt(cpvlengthsq(dv)) * space.curr_dt
-        if a.body.m_inv == 0.0 or b.body.m_inv == 0.0:
-            # At least the tree's static reach (the fastest body's travel,
-            # with room): a body at rest may be knocked toward a wall
-            # within the step.
-            closing = fmax(closing, cpBBTreeGetStaticReach(space.dynamicShapes))
-        margin += closing
-    margin_out[0] = margin
-    return QueryReject(a, b, margin)
-
 # The broad phase callback: narrow phase, arbiter lookup, handlers.
 cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID id,
                                         void *data) noexcept nogil:
