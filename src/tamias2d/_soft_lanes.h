@@ -50,6 +50,12 @@ typedef struct {
     double qc, qs;        /* rotation since the step began (cos, sin) */
 } SoftState;
 
+/* The state at byte offset `off` from st. The lanes hold their bodies'
+ * slots as byte offsets (slot * sizeof(SoftState)), so that reaching a row
+ * takes no multiplication: the kernels reach a row of each side of each
+ * lane in every pass. */
+#define SOFT_AT(st, off) (*(SoftState *)((const char *)(st) + (off)))
+
 /* SOFT_LANES contact constraints of one colour, all with `points` points
  * (one-point manifolds, most of a pile of circles, get a one-row solve).
  * Point j of lane k is field[j][k]. An empty lane is filled so that it takes
@@ -67,7 +73,7 @@ typedef struct {
  * on the large pyramid. */
 typedef struct {
     int points;                           /* 1 or 2: every lane's manifold has that many */
-    int ia[SOFT_LANES], ib[SOFT_LANES];   /* SoftState slots */
+    int ia[SOFT_LANES], ib[SOFT_LANES];   /* SoftState slots, as byte offsets (SOFT_AT) */
     unsigned char wa[SOFT_LANES], wb[SOFT_LANES];   /* write the body back (movable, not slot 0) */
     char pad0[64 - 4 - 2 * 4 * SOFT_LANES - 2 * SOFT_LANES];
     double iA[SOFT_LANES], iB[SOFT_LANES];    /* (the masses are the bodies' SoftState's) */
@@ -160,14 +166,14 @@ static inline void soft_v2_store(double *p, int k, SoftV2 v) { memcpy(p + k, &v,
 static inline SoftV2 soft_v2_splat(double s) { SoftV2 v = {s, s}; return v; }
 static inline SoftV2 soft_v2_gather(const SoftState *st, const int *idx, int k, size_t off) {
     SoftV2 v;
-    v[0] = *(const double *)((const char *)&st[idx[k]] + off);
-    v[1] = *(const double *)((const char *)&st[idx[k + 1]] + off);
+    v[0] = *(const double *)((const char *)&SOFT_AT(st, idx[k]) + off);
+    v[1] = *(const double *)((const char *)&SOFT_AT(st, idx[k + 1]) + off);
     return v;
 }
 static inline void soft_v2_scatter(SoftState *st, const int *idx, const unsigned char *w, int k,
                                    size_t off, SoftV2 v) {
-    if (w[k]) *(double *)((char *)&st[idx[k]] + off) = v[0];
-    if (w[k + 1]) *(double *)((char *)&st[idx[k + 1]] + off) = v[1];
+    if (w[k]) *(double *)((char *)&SOFT_AT(st, idx[k]) + off) = v[0];
+    if (w[k + 1]) *(double *)((char *)&SOFT_AT(st, idx[k + 1]) + off) = v[1];
 }
 /* A body's state into the lanes and its velocity back as whole rows, moved
  * between rows and lanes by shuffles (a 2x2 transpose) rather than one
@@ -179,7 +185,7 @@ static inline void soft_v2_scatter(SoftState *st, const int *idx, const unsigned
 #endif
 static inline void soft_v2_gather_state(const SoftState *st, const int *idx, int k, int full,
                                         SoftV2 out[8]) {
-    const double *a = &st[idx[k]].vx, *b = &st[idx[k + 1]].vx;
+    const double *a = &SOFT_AT(st, idx[k]).vx, *b = &SOFT_AT(st, idx[k + 1]).vx;
     SoftV2 a0, a1, b0, b1;
     memcpy(&a0, a, 16); memcpy(&a1, a + 2, 16);
     memcpy(&b0, b, 16); memcpy(&b1, b + 2, 16);
@@ -197,17 +203,18 @@ static inline void soft_v2_gather_state(const SoftState *st, const int *idx, int
     }
 }
 static inline void soft_v2_scatter_velocity(SoftState *st, const int *idx, const unsigned char *w,
-                                            int k, SoftV2 vx, SoftV2 vy, SoftV2 ww) {
+                                            int k, SoftV2 vx, SoftV2 vy, SoftV2 ww, SoftV2 m) {
+    (void)m;
     SoftV2 row;
     if (w[k]) {
         row = SOFT_SHUFFLE2(vx, vy, 0, 2);
-        memcpy(&st[idx[k]].vx, &row, 16);
-        st[idx[k]].w = ww[0];
+        memcpy(&SOFT_AT(st, idx[k]).vx, &row, 16);
+        SOFT_AT(st, idx[k]).w = ww[0];
     }
     if (w[k + 1]) {
         row = SOFT_SHUFFLE2(vx, vy, 1, 3);
-        memcpy(&st[idx[k + 1]].vx, &row, 16);
-        st[idx[k + 1]].w = ww[1];
+        memcpy(&SOFT_AT(st, idx[k + 1]).vx, &row, 16);
+        SOFT_AT(st, idx[k + 1]).w = ww[1];
     }
 }
 #define soft_v_load soft_v2_load
@@ -239,7 +246,7 @@ static inline SoftV4 soft_v4_gather(const SoftState *st, const int *idx, int k, 
     int j;
     (void)k;
     for (j = 0; j < 4; j++)
-        v[j] = *(const double *)((const char *)&st[idx[j]] + off);
+        v[j] = *(const double *)((const char *)&SOFT_AT(st, idx[j]) + off);
     return v;
 }
 static inline void soft_v4_scatter(SoftState *st, const int *idx, const unsigned char *w, int k,
@@ -247,7 +254,7 @@ static inline void soft_v4_scatter(SoftState *st, const int *idx, const unsigned
     int j;
     (void)k;
     for (j = 0; j < 4; j++)
-        if (w[j]) *(double *)((char *)&st[idx[j]] + off) = v[j];
+        if (w[j]) *(double *)((char *)&SOFT_AT(st, idx[j]) + off) = v[j];
 }
 /* As soft_v2_gather_state, four rows at a time (4x4 transposes). */
 #define SOFT_SHUFFLE4(a, b, i, j, l, m) __builtin_shuffle((a), (b), (SoftM4){i, j, l, m})
@@ -257,9 +264,9 @@ static inline void soft_v4_scatter(SoftState *st, const int *idx, const unsigned
         o0 = SOFT_SHUFFLE4(t0_, t2_, 0, 1, 4, 5); o1 = SOFT_SHUFFLE4(t1_, t3_, 0, 1, 4, 5); \
         o2 = SOFT_SHUFFLE4(t0_, t2_, 2, 3, 6, 7); o3 = SOFT_SHUFFLE4(t1_, t3_, 2, 3, 6, 7); \
     } while (0)
-static inline SoftV4 soft_v4_row(const SoftState *st, int i, int half) {
+static inline SoftV4 soft_v4_row(const SoftState *st, int i, int half) {    /* i: a byte offset */
     SoftV4 r;
-    memcpy(&r, &st[i].vx + 4 * half, sizeof(r));
+    memcpy(&r, &SOFT_AT(st, i).vx + 4 * half, sizeof(r));
     return r;
 }
 static inline void soft_v4_gather_state(const SoftState *st, const int *idx, int k, int full,
@@ -274,15 +281,26 @@ static inline void soft_v4_gather_state(const SoftState *st, const int *idx, int
         SOFT_TRANSPOSE4(r0, r1, r2, r3, out[4], out[5], out[6], out[7]);  /* dpx, dpy, qc, qs */
     }
 }
+/* The velocities back as whole rows (vx, vy, w and the m_inv gathered
+ * with them, so the row's last place keeps its bits), one unconditional
+ * aligned 32-byte store each (the states start on a cache line): a side
+ * that is not written back (immovable, or an empty lane) stores into a
+ * local row instead of being branched around. (With the branches the
+ * compiler kept the four rows on the stack and reloaded each: ten
+ * instructions a row.) */
+static inline SoftV4 *soft_v4_row_out(SoftState *st, const int *idx, const unsigned char *w,
+                                      int j, SoftV4 *sink) {
+    return w[j] ? (SoftV4 *)__builtin_assume_aligned(&SOFT_AT(st, idx[j]).vx, 32) : sink;
+}
 static inline void soft_v4_scatter_velocity(SoftState *st, const int *idx, const unsigned char *w,
-                                            int k, SoftV4 vx, SoftV4 vy, SoftV4 ww) {
-    SoftV4 r0, r1, r2, r3;
+                                            int k, SoftV4 vx, SoftV4 vy, SoftV4 ww, SoftV4 m) {
+    SoftV4 r0, r1, r2, r3, sink;
     (void)k;
-    SOFT_TRANSPOSE4(vx, vy, ww, ww, r0, r1, r2, r3);   /* row j: vx, vy, w, (w) */
-    if (w[0]) memcpy(&st[idx[0]].vx, &r0, 3 * sizeof(double));
-    if (w[1]) memcpy(&st[idx[1]].vx, &r1, 3 * sizeof(double));
-    if (w[2]) memcpy(&st[idx[2]].vx, &r2, 3 * sizeof(double));
-    if (w[3]) memcpy(&st[idx[3]].vx, &r3, 3 * sizeof(double));
+    SOFT_TRANSPOSE4(vx, vy, ww, m, r0, r1, r2, r3);   /* row j: vx, vy, w, m_inv */
+    *soft_v4_row_out(st, idx, w, 0, &sink) = r0;
+    *soft_v4_row_out(st, idx, w, 1, &sink) = r1;
+    *soft_v4_row_out(st, idx, w, 2, &sink) = r2;
+    *soft_v4_row_out(st, idx, w, 3, &sink) = r3;
 }
 #define soft_v_load soft_v4_load
 #define soft_v_store soft_v4_store
@@ -321,24 +339,25 @@ static inline double soft_s_load(const double *p, int k) { return p[k]; }
 static inline void soft_s_store(double *p, int k, double v) { p[k] = v; }
 static inline double soft_s_splat(double s) { return s; }
 static inline double soft_s_gather(const SoftState *st, const int *idx, int k, size_t off) {
-    return *(const double *)((const char *)&st[idx[k]] + off);
+    return *(const double *)((const char *)&SOFT_AT(st, idx[k]) + off);
 }
 static inline void soft_s_scatter(SoftState *st, const int *idx, const unsigned char *w, int k,
                                   size_t off, double v) {
-    if (w[k]) *(double *)((char *)&st[idx[k]] + off) = v;
+    if (w[k]) *(double *)((char *)&SOFT_AT(st, idx[k]) + off) = v;
 }
 static inline void soft_s_gather_state(const SoftState *st, const int *idx, int k, int full,
                                        double out[8]) {
-    const SoftState *b = &st[idx[k]];
+    const SoftState *b = &SOFT_AT(st, idx[k]);
     out[0] = b->vx; out[1] = b->vy; out[2] = b->w; out[3] = b->m_inv;
     if (full) {
         out[4] = b->dpx; out[5] = b->dpy; out[6] = b->qc; out[7] = b->qs;
     }
 }
 static inline void soft_s_scatter_velocity(SoftState *st, const int *idx, const unsigned char *w,
-                                           int k, double vx, double vy, double ww) {
+                                           int k, double vx, double vy, double ww, double m) {
+    (void)m;
     if (w[k]) {
-        st[idx[k]].vx = vx; st[idx[k]].vy = vy; st[idx[k]].w = ww;
+        SOFT_AT(st, idx[k]).vx = vx; SOFT_AT(st, idx[k]).vy = vy; SOFT_AT(st, idx[k]).w = ww;
     }
 }
 #define soft_v_load soft_s_load

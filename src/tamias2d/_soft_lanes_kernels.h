@@ -46,8 +46,8 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftSt
             vby = vby + mB * py;
             wb = wb + iB * (xn * RN(rBx, rBy) + xt * RT(rBx, rBy));
         }
-        soft_v_scatter_velocity(st, c->ia, c->wa, k, vax, vay, wa);
-        soft_v_scatter_velocity(st, c->ib, c->wb, k, vbx, vby, wb);
+        soft_v_scatter_velocity(st, c->ia, c->wa, k, vax, vay, wa, mA);
+        soft_v_scatter_velocity(st, c->ib, c->wb, k, vbx, vby, wb, mB);
     }
 }
 
@@ -203,8 +203,8 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftLaneLin
                 }
             }
         }
-        soft_v_scatter_velocity(st, c->ia, c->wa, k, vax, vay, wa);
-        soft_v_scatter_velocity(st, c->ib, c->wb, k, vbx, vby, wb);
+        soft_v_scatter_velocity(st, c->ia, c->wa, k, vax, vay, wa, mA);
+        soft_v_scatter_velocity(st, c->ib, c->wb, k, vbx, vby, wb, mB);
     }
 }
 

@@ -34,13 +34,14 @@ colouring and SIMD lanes can partition these arrays later.
 """
 from libc.math cimport INFINITY, pow, sqrt, cos, sin, fabs, fmin, fmax, hypot
 from libc.stdint cimport uint32_t
+from libc.limits cimport INT_MAX
 from libc.string cimport memset, memcmp
 from tamias2d._config cimport cpFloat, cpBool, cpTimestamp
 from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, cpArray, cpConstraint,
     cpSoftSettings, cpSoftScratch, TAMIAS_SOLVER_CHIPMUNK, TAMIAS_SOLVER_SOFT,
     CP_BODY_TYPE_KINEMATIC, CP_ARBITER_STATE_FIRST_COLLISION, CP_ARBITER_STATE_NORMAL,
     CP_ARBITER_STATE_IGNORE)
-from tamias2d._containers cimport cprealloc, cpfree, cpHashSetFind, cpArrayPush
+from tamias2d._containers cimport cprealloc, cpfree, cpHashSetFind, cpArrayPush, cpSetOutOfMemory
 from tamias2d._threads cimport (tamias_take_next, tamias_load, tamias_store, tamias_add,
     tamias_add_int,
     tamias_exchange, tamias_cpu_relax, tamias_yield, tamias_now_ns)
@@ -1022,6 +1023,12 @@ cdef bint SoftGatherBodies(SoftContext *ctx) noexcept nogil:
     cdef cpSpace *space = ctx.space
     cdef int n = space.dynamicBodies.num + 1
     cdef SoftBody *sb
+    if n > INT_MAX // <int>sizeof(SoftState):
+        # The lanes hold slots as byte offsets in an int (SoftPackLane):
+        # beyond 33 million bodies, as if out of memory (which a space of
+        # that size all but is).
+        cpSetOutOfMemory()
+        return 0
     ctx.bodies = <SoftBody *>_reserve(space, SOFT_SCRATCH_BODIES, n, sizeof(SoftBody))
     ctx.states = <SoftState *>_reserve_lines(space, SOFT_SCRATCH_STATES, n, sizeof(SoftState))
     ctx.motion = <SoftMotion *>_reserve(space, SOFT_SCRATCH_MOTION, n, sizeof(SoftMotion))
@@ -2105,8 +2112,9 @@ cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, SoftLaneLinks *links, in
     cdef SoftBody *b = &ctx.bodies[sc.ib]
     cdef const SoftPoint *sp
     cdef int j
-    ln.ia[k] = sc.ia
-    ln.ib[k] = sc.ib
+    # (As byte offsets: SOFT_AT in _soft_lanes.h.)
+    ln.ia[k] = sc.ia * <int>sizeof(SoftState)
+    ln.ib[k] = sc.ib * <int>sizeof(SoftState)
     # (The count found which bodies are movable: SoftCountContact.)
     ln.wa[k] = ctx.colorKeys[i].a != 0
     ln.wb[k] = ctx.colorKeys[i].b != 0
