@@ -50,7 +50,7 @@ from cpython.pythread cimport (PyThread_type_lock, PyThread_allocate_lock,
 
 cdef extern from "pythread.h" nogil:
     unsigned long PyThread_start_new_thread(void (*func)(void *) noexcept nogil, void *arg)
-from tamias2d.vector cimport cpVect, cpv, cpTransformNewTranspose
+from tamias2d.vector cimport cpVect, cpv, cpTransformNewTranspose, cpfmin, cpfmax
 from tamias2d.body cimport cpBodyGetType, cpBodyIsSleeping, cpBodyUpdateVelocity, cpBodyUpdatePosition
 from tamias2d.constraints cimport tamias_constraint_scale_impulse
 from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, StageResetArbiters,
@@ -1219,8 +1219,9 @@ cdef void SoftFinishJoints(SoftContext *ctx) noexcept nogil:
 # -- contacts ------------------------------------------------------------------------------
 
 cdef inline cpFloat SoftShapeSide(const cpShape *shape) noexcept nogil:
-    # The smaller side of a shape's bounding box.
-    return fmin(shape.bb.r - shape.bb.l, shape.bb.t - shape.bb.b)
+    # The smaller side of a shape's bounding box. (cpfmin, a comparison,
+    # where the sizes cannot be NaN or -0: libm's fmin is a call.)
+    return cpfmin(shape.bb.r - shape.bb.l, shape.bb.t - shape.bb.b)
 
 cdef inline cpFloat SoftShapeSize(cpFloat side, const cpShape *shape,
                                   const SoftBody *body) noexcept nogil:
@@ -1247,7 +1248,7 @@ cdef inline cpFloat SoftContactSize(const cpArbiter *arb, const SoftBody *a, con
         return sb
     if sb == 0.0:
         return sa
-    return fmin(sa, sb)
+    return cpfmin(sa, sb)
 
 cdef inline cpFloat SoftPreload(SoftBody *a, SoftBody *b, bint inBlock,
                                 cpFloat *maxStiffening) noexcept nogil:
@@ -1268,8 +1269,8 @@ cdef inline cpFloat SoftPreload(SoftBody *a, SoftBody *b, bint inBlock,
     if a.m_inv == 0.0 or b.m_inv == 0.0 or inBlock:
         # (A block's rows carry a heavy body's load through at once.)
         return SOFT_PRELOAD_CHAIN
-    lo = fmin(a.m_inv, b.m_inv)
-    hi = fmax(a.m_inv, b.m_inv)
+    lo = cpfmin(a.m_inv, b.m_inv)
+    hi = cpfmax(a.m_inv, b.m_inv)
     if lo * SOFT_PRELOAD_MAX_RATIO >= hi:
         return SOFT_PRELOAD_CHAIN
     maxStiffening[0] = SOFT_RATIO_STIFFENING
