@@ -5,6 +5,12 @@ keep floating-point arithmetic exactly as Munk2D compiled by pymunk does it: no
 fused multiply-add (``-ffp-contract=off``), no ``-ffast-math``, no
 ``-march=native``.
 
+The soft solver's module (_soft_step) is built with GCC's inlining limits
+raised (SOFT_STEP_GCC_ARGS): its per-contact and per-body functions are
+called once per contact or body from one loop each, and left as calls they
+cost the rain of benchmarks/callgrind_steps.py 2% of its step. Only GCC
+knows those parameters; other compilers build it as the rest.
+
 Environment:
   TAMIAS2D_DEBUG=1       bounds and wraparound checks on, ``-O0 -g``.
   TAMIAS2D_ONLY=a,b      build only the named modules (for working on one
@@ -12,9 +18,11 @@ Environment:
 """
 import glob
 import os
+import subprocess
 import sys
 
 from setuptools import Extension, setup
+from setuptools.command.build_ext import build_ext
 
 try:
     from Cython.Build import cythonize
@@ -57,7 +65,37 @@ for path in sorted(glob.glob(os.path.join("src", "tamias2d", "*.pyx"))):
         define_macros=[("CYTHON_TRACE", "0")],
     ))
 
+# Inlining limits for the soft step's module (see the docstring). Inlining
+# changes no arithmetic: -ffp-contract=off and no -ffast-math hold everywhere.
+SOFT_STEP_GCC_ARGS = ["--param", "max-inline-insns-single=2000",
+                      "--param", "max-inline-insns-auto=100"]
+
+
+def _is_gcc(command):
+    """Whether the C compiler `command` (a list, as distutils keeps it) is GCC."""
+    words = [w for w in command if not w.endswith("ccache")]
+    if not words:
+        return False
+    try:
+        out = subprocess.run([words[0], "--version"], capture_output=True, text=True,
+                             timeout=30).stdout
+    except (OSError, subprocess.SubprocessError):
+        return False
+    return "Free Software Foundation" in out and "clang" not in out.lower()
+
+
+class BuildExt(build_ext):
+    def build_extensions(self):
+        if (not DEBUG and self.compiler.compiler_type == "unix"
+                and _is_gcc(self.compiler.compiler_so)):
+            for ext in self.extensions:
+                if ext.name == "tamias2d._soft_step":
+                    ext.extra_compile_args = list(ext.extra_compile_args) + SOFT_STEP_GCC_ARGS
+        super().build_extensions()
+
+
 setup(
+    cmdclass={"build_ext": BuildExt},
     ext_modules=cythonize(
         extensions,
         compiler_directives=directives,

@@ -1738,7 +1738,7 @@ cdef inline cpVect SoftSlotPosition(SoftContext *ctx, int slot, const cpBody *bo
         return cpv(ctx.motion[slot].px, ctx.motion[slot].py)
     return body.p
 
-cdef void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept nogil:
+cdef inline void SoftPrepareContact(SoftContext *ctx, int n, SoftContact *sc) noexcept nogil:
     # Contact n into *sc: its points' arms, masses, softness, separation and
     # warm start, and Chipmunk's fields of its cpContacts.
     cdef cpArbiter *arb = <cpArbiter *>ctx.space.arbiters.arr[ctx.contactSource[n]]
