@@ -85,8 +85,26 @@ cdef struct Pair:
     Thread b
     cpPairSlot slot
 
-# A pair reported with where the tree keeps its slot (NULL: not kept).
-ctypedef void (*cpBBTreeSlotFunc)(void *obj1, void *obj2, cpPairSlot *slot, void *data) noexcept nogil
+# A pair the soft solver's walk collects (cpBBTreeReindexCollect): its two
+# objects, as cpBBTreeReindexQuery would report them, and where the tree
+# keeps the pair's slot (NULL for a pair new this walk: not kept).
+cdef struct cpCollectedPair:
+    void *a
+    void *b
+    cpPairSlot *slot
+
+# Where that walk writes its pairs, in order: `pairs` has room for `cap`.
+# The walk calls `grow` as soon as the array is full (it may enlarge it,
+# updating pairs and cap; while it stays full, further pairs are dropped).
+# `complete` is cleared when a pair has no slot or is dropped: such a walk
+# cannot stand for the next steps' (see `known` below).
+cdef struct cpPairCollector:
+    cpCollectedPair *pairs
+    int count
+    int cap
+    bint complete
+    void (*grow)(cpPairCollector *collector) noexcept nogil
+    void *data                       # the caller's (for grow)
 
 # -- cpBBTree.c -----------------------------------------------------------------------
 cdef cpBBTree *cpBBTreeAlloc() noexcept nogil
@@ -97,12 +115,13 @@ cdef cpSpatialIndex *cpBBTreeNew(cpSpatialIndexBBFunc bbfunc, cpSpatialIndex *st
 cdef void cpBBTreeOptimize(cpSpatialIndex *index) noexcept nogil
 cdef void cpBBTreeSetVelocityFunc(cpSpatialIndex *index, cpBBTreeVelocityFunc func) noexcept nogil
 cdef void cpBBTreeSetFetchFunc(cpSpatialIndex *index, cpBBTreeFetchFunc func) noexcept nogil
-# The soft solver's broad phase: cpBBTreeReindexQuery reporting where each
-# pair's id lives, or nothing when the tree is still at the version in
-# `known` (then the caller's record of the last walk holds); false (nothing
-# done) unless the index and its static index are trees.
-cdef bint cpBBTreeReindexQuerySlots(cpSpatialIndex *index, cpBBTreeSlotFunc func,
-                                    void *data, unsigned long long *known) noexcept nogil
+# The soft solver's broad phase: cpBBTreeReindexQuery's pairs written into
+# `collector` with where each pair's id lives, or nothing when the tree is
+# still at the version in `known` (then the caller's record of the last walk
+# holds); false (nothing done) unless the index and its static index are
+# trees.
+cdef bint cpBBTreeReindexCollect(cpSpatialIndex *index, cpPairCollector *collector,
+                                 unsigned long long *known) noexcept nogil
 # Sets how far around each dynamic leaf's box the static tree is searched
 # (kept in the dynamic tree). Made larger, every leaf looks for its pairs
 # afresh in the next walk, so the cached pairs are those of the new reach.

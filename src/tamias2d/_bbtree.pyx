@@ -444,15 +444,34 @@ cdef struct MarkContext:
     Node *staticRoot
     cpSpatialIndexQueryFunc func
     void *data
-    # Set by cpBBTreeReindexQuerySlots instead of func: pairs are reported
+    # Set by cpBBTreeReindexCollect instead of func: pairs are written there
     # with where their id lives, for the caller to store it later.
-    cpBBTreeSlotFunc slotFunc
+    cpPairCollector *collector
 
 
 cdef inline cpBB GrownBB(cpBB bb, cpFloat reach) noexcept nogil:
     if reach == 0.0:
         return bb
     return cpBBNew(bb.l - reach, bb.b - reach, bb.r + reach, bb.t + reach)
+
+
+cdef inline void CollectPair(cpPairCollector *c, void *a, void *b,
+                             cpPairSlot *slot) noexcept nogil:
+    # A pair into the collector (inline: the walk writes every pair, and a
+    # call through a pointer for each cost more than the writing).
+    cdef int n = c.count
+    cdef cpCollectedPair *p
+    if slot == NULL or n >= c.cap:
+        c.complete = 0
+        if n >= c.cap:
+            return
+    p = &c.pairs[n]
+    p.a = a
+    p.b = b
+    p.slot = slot
+    c.count = n + 1
+    if n + 1 == c.cap:
+        c.grow(c)
 
 
 cdef void MarkLeafQuery(Node *subtree, Node *leaf, cpBB bb, bint left,
@@ -472,8 +491,8 @@ cdef void MarkLeafQuery(Node *subtree, Node *leaf, cpBB bb, bint left,
                 else:
                     if node.node.leaf.stamp < leaf.node.leaf.stamp:
                         PairInsert(node, leaf, context.tree)
-                    if context.slotFunc != NULL:
-                        context.slotFunc(leaf.obj, node.obj, NULL, context.data)
+                    if context.collector != NULL:
+                        CollectPair(context.collector, leaf.obj, node.obj, NULL)
                     else:
                         context.func(leaf.obj, node.obj, 0, context.data)
             else:
@@ -509,8 +528,8 @@ cdef void MarkLeaf(Node *leaf, MarkContext *context) noexcept nogil:
                 # The narrow phase takes long: fetch the next pair meanwhile
                 # (walking the pairs is otherwise a cache miss per pair).
                 tamias_prefetch(pair.b.next)
-                if context.slotFunc != NULL:
-                    context.slotFunc(pair.a.leaf.obj, leaf.obj, &pair.slot, context.data)
+                if context.collector != NULL:
+                    CollectPair(context.collector, pair.a.leaf.obj, leaf.obj, &pair.slot)
                 else:
                     pair.slot.id = context.func(pair.a.leaf.obj, leaf.obj, pair.slot.id, context.data)
                 pair = pair.b.next
@@ -558,7 +577,7 @@ cdef void MarkBatch(Node **batch, int count, MarkContext *context) noexcept nogi
 
 cdef void MarkSubtree(Node *subtree, MarkContext *context) noexcept nogil:
     # The leaves in depth-first order. When pairs are only collected
-    # (slotFunc; no narrow phase runs between them to hide the misses),
+    # (collector; no narrow phase runs between them to hide the misses),
     # unchanged leaves are held back in batches and their pair lists
     # fetched together first; a leaf that moved flushes the batch before
     # its own query, so the order is the same. (In small trees, no batches.)
@@ -566,7 +585,7 @@ cdef void MarkSubtree(Node *subtree, MarkContext *context) noexcept nogil:
     cdef Node *node
     cdef Node *batch[MARK_BATCH]
     cdef int held = 0
-    cdef bint batching = (context.slotFunc != NULL
+    cdef bint batching = (context.collector != NULL
                           and cpHashSetCount(context.tree.leaves) >= MARK_BATCH_MIN_LEAVES)
     cdef cpTimestamp stamp = GetMasterTree(context.tree).stamp
     StackInit(&stack)
@@ -639,7 +658,7 @@ cdef void LeafAddPairs(Node *leaf, cpBBTree *tree) noexcept nogil:
             context.staticRoot = NULL
             context.func = NULL
             context.data = NULL
-            context.slotFunc = NULL
+            context.collector = NULL
             MarkLeafQuery(dynamicRoot, leaf, GrownBB(leaf.bb, context.tree.staticReach),
                           True, &context)
     else:
@@ -647,7 +666,7 @@ cdef void LeafAddPairs(Node *leaf, cpBBTree *tree) noexcept nogil:
         context.staticRoot = GetRootIfTree(tree.spatialIndex.staticIndex)
         context.func = VoidQueryFunc
         context.data = NULL
-        context.slotFunc = NULL
+        context.collector = NULL
         MarkLeaf(leaf, &context)
 
 
@@ -827,10 +846,10 @@ cdef void RefreshLeaves(cpBBTree *tree) noexcept nogil:
         LeafUpdate(list.items[i], tree)
 
 
-cdef void ReindexQuery(cpBBTree *tree, cpSpatialIndexQueryFunc func, cpBBTreeSlotFunc slotFunc,
+cdef void ReindexQuery(cpBBTree *tree, cpSpatialIndexQueryFunc func, cpPairCollector *collector,
                        void *data, unsigned long long *known) noexcept nogil:
-    # Pairs go to func (the id it returns is kept) or, with slotFunc, to
-    # slotFunc with where the id lives. Given `known`, a version of the tree
+    # Pairs go to func (the id it returns is kept) or, with a collector,
+    # into it with where the id lives. Given `known`, a version of the tree
     # whose walk the caller has kept: the walk is skipped if the leaves'
     # refresh left the tree at that version (the same pairs, in the same
     # order, would be reported); otherwise set to the version after it.
@@ -853,7 +872,7 @@ cdef void ReindexQuery(cpBBTree *tree, cpSpatialIndexQueryFunc func, cpBBTreeSlo
     context.staticRoot = staticRoot
     context.func = func
     context.data = data
-    context.slotFunc = slotFunc
+    context.collector = collector
     MarkSubtree(tree.root, &context)
     if staticIndex != NULL and staticRoot == NULL and func != NULL:
         cpSpatialIndexCollideStatic(<cpSpatialIndex *>tree, staticIndex, func, data)
@@ -867,21 +886,22 @@ cdef void cpBBTreeReindexQuery(cpSpatialIndex *index, cpSpatialIndexQueryFunc fu
     ReindexQuery(<cpBBTree *>index, func, NULL, data, NULL)
 
 
-cdef bint cpBBTreeReindexQuerySlots(cpSpatialIndex *index, cpBBTreeSlotFunc func,
-                                    void *data, unsigned long long *known) noexcept nogil:
-    # cpBBTreeReindexQuery, but each pair is reported with a pointer to the
-    # id the tree keeps for it (NULL for a pair new this step, whose id is
-    # not kept), so that the caller can run the narrow phase later, and in
-    # parallel, and store the ids then. Same pairs in the same order, unless
-    # `known` says that the caller has them already (see ReindexQuery).
-    # False (nothing done) unless this index and its static index are trees.
+cdef bint cpBBTreeReindexCollect(cpSpatialIndex *index, cpPairCollector *collector,
+                                 unsigned long long *known) noexcept nogil:
+    # cpBBTreeReindexQuery, but each pair is written into the collector with
+    # a pointer to the id the tree keeps for it (NULL for a pair new this
+    # step, whose id is not kept), so that the caller can run the narrow
+    # phase later, and in parallel, and store the ids then. Same pairs in
+    # the same order, unless `known` says that the caller has them already
+    # (see ReindexQuery). False (nothing done) unless this index and its
+    # static index are trees.
     cdef cpSpatialIndex *staticIndex
     if index.klass != &klass:
         return 0
     staticIndex = (<cpBBTree *>index).spatialIndex.staticIndex
     if staticIndex != NULL and staticIndex.klass != &klass:
         return 0
-    ReindexQuery(<cpBBTree *>index, NULL, func, data, known)
+    ReindexQuery(<cpBBTree *>index, NULL, collector, NULL, known)
     return 1
 
 

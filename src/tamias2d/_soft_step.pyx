@@ -64,7 +64,7 @@ from tamias2d.arbiter cimport cpArbiterUpdate, cpArbiterUnthread, cpArbiterPushT
 from tamias2d._spatialindex cimport (cpSpatialIndexEach, cpSpatialIndexReindexQuery,
     cpSpatialIndexCount)
 from tamias2d.shape cimport cpShapeCacheBB
-from tamias2d._bbtree cimport (cpBBTreeReindexQuerySlots, cpPairSlot, cpBBTreeGetStaticReach,
+from tamias2d._bbtree cimport (cpBBTreeReindexCollect, cpPairCollector, cpCollectedPair, cpPairSlot, cpBBTreeGetStaticReach,
     cpBBTreeSetStaticReach)
 from tamias2d.collision cimport (cpCollideSoft, CollisionDiagnostics, cpCollisionTakeDiagnostics,
     cpCollisionPutDiagnostics)
@@ -193,12 +193,10 @@ cdef void *_reserve_lines(cpSpace *space, int which, int need, size_t size) noex
 # -- the step's context -----------------------------------------------------------------
 
 # A pair the broad phase reported (kept for the next steps while the tree
-# stays as it was), and its narrow phase (SoftCollide), in arrays of the
-# same index. Only a pair that is not rejected writes its SoftCandidate.
-cdef struct SoftPair:
-    cpShape *a
-    cpShape *b
-    cpPairSlot *slot          # what the broad phase keeps for the pair (NULL: nothing)
+# stays as it was: cpCollectedPair, its shapes as a and b), and its narrow
+# phase (SoftCollide), in arrays of the same index. Only a pair that is not
+# rejected writes its SoftCandidate.
+ctypedef cpCollectedPair SoftPair
 
 cdef struct SoftCandidate:
     cpCollisionID id
@@ -261,7 +259,6 @@ cdef struct SoftContext:
     int overflowCount
     SoftPair *pairs           # this step's pairs from the broad phase (or the last walk's)
     int pairCount
-    int pairCap
     SoftCandidate *candidates # their narrow phase
     unsigned char *touching   # the pair's SOFT_PAIR_* flags (0: no contacts)
     cpContact **destinations  # on threads, with updateInNarrow: where each pair's contacts go
@@ -269,7 +266,6 @@ cdef struct SoftContext:
     cpArbiter **pairArbiters  # ... and each updated pair's arbiter (the candidate's, packed)
     bint updateInNarrow       # no begin or pre-solve callbacks: arbiters updated in parallel
     bint acceptInNarrow       # ... and one thread: the narrow phase also does SoftAcceptPair's part
-    bint keepingPairs         # the broad phase's walk is being kept (SoftCollectPair)
     volatile long elastic     # a contact has restitution (set by SoftCountRange)
     volatile long customVelocity  # a body has its own velocity_func (SoftGatherRange)
     volatile long customPosition  # ... position_func
@@ -387,7 +383,7 @@ def _profile(on):
 # -- collision: the broad phase, then the narrow phase on the pool ---------------------
 # The chipmunk solver runs the narrow phase of each pair as the broad phase
 # reports it (StageCollide). Here the broad phase first lists the pairs
-# (cpBBTreeReindexQuerySlots: same pairs, same order), then the narrow phase
+# (cpBBTreeReindexCollect: same pairs, same order), then the narrow phase
 # of every pair runs, on the pool when the step is threaded (it only reads
 # shapes and bodies, and writes the pair's own contacts and id), then, in the
 # broad phase's order on this thread, the pairs that touch get their
@@ -395,35 +391,15 @@ def _profile(on):
 # same whoever ran which pair. A begin or pre-solve callback therefore sees
 # every pair's narrow phase done.
 
-cdef void SoftGrowPairs(SoftContext *ctx) noexcept nogil:
-    # Room for the next pair (SoftCollectPair), or the out-of-memory flag up.
-    cdef SoftPair *grown = <SoftPair *>_reserve(ctx.space, SOFT_SCRATCH_PAIRS, ctx.pairCount + 1,
+cdef void SoftGrowPairs(cpPairCollector *collector) noexcept nogil:
+    # Room for the broad phase's next pair (the tree calls this when the
+    # array is full), or the out-of-memory flag up.
+    cdef cpSpace *space = <cpSpace *>collector.data
+    cdef SoftPair *grown = <SoftPair *>_reserve(space, SOFT_SCRATCH_PAIRS, collector.count + 1,
                                                 sizeof(SoftPair))
     if grown != NULL:
-        ctx.pairs = grown
-        ctx.pairCap = ctx.space.softScratch.cap[SOFT_SCRATCH_PAIRS]
-
-cdef void SoftCollectPair(void *a, void *b, cpPairSlot *slot, void *data) noexcept nogil:
-    # A pair of the walk, for the narrow phase. The pairs are kept for the
-    # next steps while every pair has its slot (pairs new this step have
-    # none) and no allocation failed. There is always room for the next
-    # pair (the array grows after the pair that fills it, when nothing else
-    # is held in registers: this runs for every pair), but after a failed
-    # allocation: then the pair is skipped (the flag is up).
-    cdef SoftContext *ctx = <SoftContext *>data
-    cdef SoftPair *pair
-    cdef int n = ctx.pairCount
-    if slot == NULL or n >= ctx.pairCap:
-        ctx.keepingPairs = 0
-        if n >= ctx.pairCap:
-            return
-    pair = &ctx.pairs[n]
-    pair.a = <cpShape *>a
-    pair.b = <cpShape *>b
-    pair.slot = slot
-    ctx.pairCount = n + 1
-    if n + 1 == ctx.pairCap:
-        SoftGrowPairs(ctx)
+        collector.pairs = grown
+        collector.cap = space.softScratch.cap[SOFT_SCRATCH_PAIRS]
 
 
 cdef bint _use_guesses = 1
@@ -541,16 +517,20 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef cpFloat margin
     cdef const cpShape *pair[2]
     cdef cpContact *dest
+    cdef cpShape *a
+    cdef cpShape *b
     for i in range(begin, end):
         p = &ctx.pairs[i]
+        a = <cpShape *>p.a
+        b = <cpShape *>p.b
         if ctx.fetchAhead and i + SOFT_NARROW_PREFETCH < end:
             # The broad phase's pair slots and the shapes are scattered in
             # memory: a cache miss each, which stalled this loop more than
             # the collision itself took.
             q = &ctx.pairs[i + SOFT_NARROW_PREFETCH]
             tamias_prefetch(q.slot)
-            SoftFetchShape(q.a)
-            SoftFetchShape(q.b)
+            SoftFetchShape(<cpShape *>q.a)
+            SoftFetchShape(<cpShape *>q.b)
         if ctx.fetchAhead and i + SOFT_NARROW_PREFETCH // 2 < end:
             # The arbiter its slot guesses, now that the slot has arrived.
             q = &ctx.pairs[i + SOFT_NARROW_PREFETCH // 2]
@@ -560,11 +540,11 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
                 SoftFetchLines(q.slot.arbiter, sizeof(cpArbiter))
             # And, the shapes having arrived, what the rejection reads of
             # their bodies (masses and the bullet flag, two lines apart).
-            tamias_prefetch(&q.a.body.m_inv)
-            tamias_prefetch(&q.a.body.isBullet)
-            tamias_prefetch(&q.b.body.m_inv)
-            tamias_prefetch(&q.b.body.isBullet)
-        if cpSpaceRejectPair(ctx.space, p.a, p.b, &margin):
+            tamias_prefetch(&(<cpShape *>q.a).body.m_inv)
+            tamias_prefetch(&(<cpShape *>q.a).body.isBullet)
+            tamias_prefetch(&(<cpShape *>q.b).body.m_inv)
+            tamias_prefetch(&(<cpShape *>q.b).body.isBullet)
+        if cpSpaceRejectPair(ctx.space, a, b, &margin):
             ctx.touching[i] = 0
             continue
         # Accepted here, a pair's candidate is read by nothing after it: on
@@ -590,7 +570,7 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
             dest = cpContactBufferRoom(ctx.space)
             if dest == NULL:
                 dest = c.contacts   # out of memory: the flag is up, the pair is skipped below
-        c.info = cpCollideSoft(p.a, p.b, c.id, dest, margin)
+        c.info = cpCollideSoft(a, b, c.id, dest, margin)
         ctx.touching[i] = SOFT_PAIR_TOUCHING if c.info.count > 0 else 0
         if slot != NULL:
             slot.id = c.info.id
@@ -616,7 +596,7 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
                 # until the serial pass copies them to the contact buffer.
                 cpArbiterUpdate(c.arb, &c.info, ctx.space)
                 c.updated = 1
-                c.solid = cpSpacePairIsSolid(p.a, p.b)
+                c.solid = cpSpacePairIsSolid(a, b)
                 ctx.touching[i] |= SOFT_PAIR_UPDATED
                 if ctx.pairArbiters != NULL:
                     # For the threaded pass after (SoftCollide): what
@@ -705,6 +685,7 @@ cdef void SoftSetReach(cpSpace *space) noexcept nogil:
 cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     cdef cpSpace *space = ctx.space
     cdef unsigned long long known, walked
+    cdef cpPairCollector collector
     cdef int i, n, flags, stamped
     cpSpacePushFreshContactBuffer(space)
     # The awake bodies' shapes are the dynamic index's; should they not be
@@ -714,11 +695,14 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     SoftRun(ctx, SOFT_TASK_UPDATE_SHAPES, 0, space.dynamicBodies.num, 0)
     if tamias_load(&ctx.shapesUpdated) != cpSpatialIndexCount(space.dynamicShapes):
         cpSpatialIndexEach(space.dynamicShapes, cpShapeUpdateFunc, NULL)
-    # (Room for one pair at least: SoftCollectPair grows the array after a
+    # (Room for one pair at least: the walk grows the array as soon as a
     # pair fills it.)
-    ctx.pairs = <SoftPair *>_reserve(space, SOFT_SCRATCH_PAIRS, 1, sizeof(SoftPair))
-    ctx.pairCap = space.softScratch.cap[SOFT_SCRATCH_PAIRS] if ctx.pairs != NULL else 0
-    ctx.pairCount = 0
+    collector.pairs = <SoftPair *>_reserve(space, SOFT_SCRATCH_PAIRS, 1, sizeof(SoftPair))
+    collector.cap = space.softScratch.cap[SOFT_SCRATCH_PAIRS] if collector.pairs != NULL else 0
+    collector.count = 0
+    collector.complete = 1
+    collector.grow = SoftGrowPairs
+    collector.data = space
     ctx.updateInNarrow = not cpSpaceHasHandlers(space, 1, 1, 0)
     # The last walk of the tree's pairs is kept: while no leaf leaves its
     # box and nothing is added or removed, the next steps take their pairs
@@ -726,17 +710,18 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     SoftSetReach(space)
     known = space.softScratch.pairsVersion if _keep_pairs else 0
     walked = known
-    ctx.keepingPairs = 1
-    if not cpBBTreeReindexQuerySlots(space.dynamicShapes, SoftCollectPair, ctx, &walked):
+    if not cpBBTreeReindexCollect(space.dynamicShapes, &collector, &walked):
         # A spatial hash: pair by pair, as the chipmunk solver.
         space.softScratch.pairsVersion = 0
         cpSpatialIndexReindexQuery(space.dynamicShapes, cpSpaceCollideShapes, space)
         return
+    ctx.pairs = collector.pairs
     if walked == known and known != 0:
         tamias_add(&_kept_walks, 1)
         ctx.pairCount = space.softScratch.pairCount
     else:
-        space.softScratch.pairsVersion = walked if ctx.keepingPairs else 0
+        ctx.pairCount = collector.count
+        space.softScratch.pairsVersion = walked if collector.complete else 0
         space.softScratch.pairCount = ctx.pairCount
     n = ctx.pairCount
     ctx.acceptInNarrow = ctx.updateInNarrow and not ctx.threaded
@@ -871,7 +856,7 @@ cdef void SoftAcceptPlaced(SoftContext *ctx, int i, SoftCandidate *c,
     if c.updated:
         c.arb.contacts = contacts
     cpSpacePushContacts(space, c.info.count)
-    arb = cpSpaceAcceptCollision(space, ctx.pairs[i].a, ctx.pairs[i].b, &c.info, c.arb,
+    arb = cpSpaceAcceptCollision(space, <cpShape *>ctx.pairs[i].a, <cpShape *>ctx.pairs[i].b, &c.info, c.arb,
                                  c.updated, c.solid if c.updated else -1)
     if c.arb == NULL and arb != NULL:
         SoftNoteShapes(space, arb, c.info.a, c.info.b)   # (new: not noted in the narrow phase)
