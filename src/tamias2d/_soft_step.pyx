@@ -66,7 +66,7 @@ from tamias2d._spatialindex cimport (cpSpatialIndexEach, cpSpatialIndexReindexQu
 from tamias2d.shape cimport cpShapeCacheBB
 from tamias2d._bbtree cimport (cpBBTreeReindexCollect, cpPairCollector, cpCollectedPair, cpPairSlot, cpBBTreeGetStaticReach,
     cpBBTreeSetStaticReach)
-from tamias2d.collision cimport (cpCollideSoft, CollisionDiagnostics, cpCollisionTakeDiagnostics,
+from tamias2d.collision cimport (cpCollideSoftInto, CollisionDiagnostics, cpCollisionTakeDiagnostics,
     cpCollisionPutDiagnostics)
 from tamias2d._config cimport (cpCollisionID, cpHashValue, CP_MAX_CONTACTS_PER_ARBITER,
     CP_HASH_PAIR, tamias_prefetch, tamias_prefetch_write, tamias_lowest_bit,
@@ -570,7 +570,7 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
             dest = cpContactBufferRoom(ctx.space)
             if dest == NULL:
                 dest = c.contacts   # out of memory: the flag is up, the pair is skipped below
-        c.info = cpCollideSoft(a, b, c.id, dest, margin)
+        cpCollideSoftInto(a, b, c.id, dest, margin, &c.info)
         ctx.touching[i] = SOFT_PAIR_TOUCHING if c.info.count > 0 else 0
         if slot != NULL:
             slot.id = c.info.id
@@ -1591,8 +1591,8 @@ cdef void SoftEstimateLoads(SoftContext *ctx) noexcept nogil:
     cdef cpFloat perWeight = 1.0 / ctx.gravity
     memset(first, 0, (<size_t>nb + 1) * sizeof(int))
     memset(waiting, 0, <size_t>nb * sizeof(int))
-    memset(estimate, 0, <size_t>n * sizeof(cpFloat))
     for i in range(n):
+        estimate[i] = 0.0   # (here rather than a memset: the loop reads each i anyway)
         if held[i] != 0:
             first[held[i] + 1] += 1
             if holding[i] != 0:

@@ -21,7 +21,7 @@ from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArray, cpContact, cp
     cpArbiter, cpContactBufferHeader,
     cpPostStepCallback, cpPostStepFunc, CP_BODY_TYPE_DYNAMIC)
 from tamias2d.body cimport cpBodyGetType
-from libc.math cimport sqrt, fmax
+from libc.math cimport sqrt, fmax, INFINITY
 from tamias2d._structs cimport cpConstraint
 from tamias2d.vector cimport cpVect, cpBB, cpvsub, cpvlengthsq
 from tamias2d.shape cimport cpShapeFilterReject
@@ -84,7 +84,8 @@ cdef cpArbiter *cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
                                        bint updated, int solid) noexcept nogil
 # cpSpaceAcceptCollision's test of a pair's shapes and bodies (not a sensor,
 # not both of infinite mass), which a caller may make beforehand.
-cdef bint cpSpacePairIsSolid(const cpShape *a, const cpShape *b) noexcept nogil
+cdef inline bint cpSpacePairIsSolid(const cpShape *a, const cpShape *b) noexcept nogil:
+    return not (a.sensor or b.sensor) and not (a.body.m == INFINITY and b.body.m == INFINITY)
 # Whether any collision handler of the space acts in one of these phases.
 cdef bint cpSpaceHasHandlers(cpSpace *space, bint begin, bint preSolve,
                              bint postSolve) noexcept nogil

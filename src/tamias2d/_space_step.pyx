@@ -216,9 +216,6 @@ cdef cpCollisionID cpSpaceCollideShapes(void *obj_a, void *obj_b, cpCollisionID 
     cpSpaceAcceptCollision(space, a, b, &info, NULL, 0, -1)
     return info.id
 
-cdef bint cpSpacePairIsSolid(const cpShape *a, const cpShape *b) noexcept nogil:
-    return not (a.sensor or b.sensor) and not (a.body.m == INFINITY and b.body.m == INFINITY)
-
 # What follows the narrow phase for a pair that touches (its contacts pushed
 # on the space's contact buffer): the persistent arbiter (`found` if the
 # caller looked it up already, else looked up or made here), begin and

@@ -10,7 +10,7 @@
 # after the C call has returned, with collision_check_flags().
 from tamias2d._config cimport cpFloat, cpHashValue, cpCollisionID, cpBool
 from tamias2d._structs cimport (cpBody, cpShape, cpContact, cpCollisionInfo,
-    cpContactPointSet)
+    cpContactPointSet, CP_NUM_SHAPES)
 from tamias2d.vector cimport (cpVect, cpv, cpvadd, cpvsub, cpvneg, cpvmult,
     cpvdot, cpvcross, cpvperp)
 
@@ -47,6 +47,34 @@ cdef cpContactPointSet cpShapesCollide(const cpShape *a, const cpShape *b) noexc
 # the unsorted slots (_testing._collision_table_call).
 ctypedef void (*CollisionFunc)(const cpShape *a, const cpShape *b, cpCollisionInfo *info) noexcept nogil
 cdef CollisionFunc CollisionFuncs[9]
+
+# The soft solver's table (cpCollideSoft's), for the inline below.
+cdef CollisionFunc SoftCollisionFuncs[9]
+
+# cpCollideSoft writing into *info, inline: the soft step's narrow phase runs
+# it for every pair its rejection lets through, and the call and the copy of
+# the returned struct cost about as much as a pair of circles' collision.
+cdef inline void cpCollideSoftInto(const cpShape *a, const cpShape *b, cpCollisionID id,
+                                   cpContact *contacts, cpFloat margin,
+                                   cpCollisionInfo *info) noexcept nogil:
+    cdef const cpShape *swap
+    cdef unsigned int index
+    if a.klass.type > b.klass.type:
+        swap = a
+        a = b
+        b = swap
+    index = <unsigned int>a.klass.type + <unsigned int>b.klass.type * CP_NUM_SHAPES
+    if index >= 9:
+        info[0] = cpCollideSoft(a, b, id, contacts, margin)   # (raises the error flag)
+        return
+    info.margin = margin
+    info.a = a
+    info.b = b
+    info.id = id
+    info.n = cpv(0.0, 0.0)
+    info.count = 0
+    info.arr = contacts
+    SoftCollisionFuncs[index](a, b, info)
 
 # The C shape of a Python Circle/Segment/Poly; TypeError/ValueError (and NULL)
 # for anything else, a bare Shape or a polygon without vertices.

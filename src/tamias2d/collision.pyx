@@ -883,7 +883,6 @@ cdef cpCollisionInfo cpCollide(const cpShape *a, const cpShape *b, cpCollisionID
 
 # The soft solver's table: Munk2D's, but polygon pairs by separating axes
 # and circles inside polygons by their faces.
-cdef CollisionFunc SoftCollisionFuncs[9]
 for _i in range(9):
     SoftCollisionFuncs[_i] = CollisionFuncs[_i]
 SoftCollisionFuncs[6] = CircleToPolyFaces
