@@ -160,6 +160,7 @@ cdef enum:
     SOFT_BODY_DEFAULT_POSITION = 2   # position_func is cpBodyUpdatePosition
     SOFT_BODY_KINEMATIC = 4
     SOFT_BODY_JOINTED = 8            # in a joint: cpBody kept current per substep
+    SOFT_BODY_MOVABLE = 16           # of finite mass or moment: contacts write to it (SoftMovable)
 
 # Contacts are coloured so that no two of one colour share a movable body
 # (Box2D's constraint graph, b2_graphColorCount); those that fit no colour,

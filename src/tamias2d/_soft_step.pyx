@@ -1081,6 +1081,8 @@ cdef void SoftGatherRange(SoftContext *ctx, int begin, int end) noexcept nogil:
             tamias_store(&ctx.customPosition, 1)
         if cpBodyGetType(body) == CP_BODY_TYPE_KINEMATIC:
             sb.flags |= SOFT_BODY_KINEMATIC
+        if body.m_inv != 0.0 or body.i_inv != 0.0:
+            sb.flags |= SOFT_BODY_MOVABLE
 
 
 # -- joints ------------------------------------------------------------------------------
@@ -1916,7 +1918,8 @@ cdef inline bint SoftMovable(SoftContext *ctx, int slot) noexcept nogil:
     # A body a contact writes to: awake and of finite mass. Immovable ones
     # (static, kinematic, sleeping) are shared freely between contacts of a
     # colour; they are read, never written.
-    return slot != 0 and (ctx.bodies[slot].m_inv != 0.0 or ctx.bodies[slot].i_inv != 0.0)
+    # (A flag of the gather; slot 0's flags are 0.)
+    return (ctx.bodies[slot].flags & SOFT_BODY_MOVABLE) != 0
 
 cdef bint SoftReserveColors(SoftContext *ctx) noexcept nogil:
     # Every buffer SoftColorContacts asks for, as large as it can ask (each
