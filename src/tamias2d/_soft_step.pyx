@@ -1333,7 +1333,7 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
             if arb.count <= 0 or arb.contacts == NULL:
                 continue
             ctx.contactSource[n] = i
-            SoftCountContact(ctx, arb, n, 0)
+            SoftStoreSeen(ctx, SoftCountContact(ctx, arb, n, 0))
             n += 1
     else:
         n = arbiters.num
@@ -1658,9 +1658,15 @@ cdef inline int SoftNotedIndex(int guess, cpBody *body, SoftContext *ctx) noexce
         return guess
     return SoftIndex(body, ctx.bodies, ctx.bodyCount)
 
-cdef inline void SoftCountContact(SoftContext *ctx, cpArbiter *arb, int n, bint atomic) noexcept nogil:
-    # Contact n (of arbiter arb): its key, whether it bounces, and its
-    # bodies' counts. (Slot 0's count is never read.)
+cdef enum:
+    # What SoftCountContact saw, for its caller to store once (ctx.ratioPairs,
+    # ctx.elastic): a store for each contact was an atomic exchange each.
+    SOFT_SEEN_RATIO = 1
+    SOFT_SEEN_ELASTIC = 2
+
+cdef inline int SoftCountContact(SoftContext *ctx, cpArbiter *arb, int n, bint atomic) noexcept nogil:
+    # Contact n (of arbiter arb): its key and its bodies' counts (slot 0's
+    # count is never read); returns SOFT_SEEN_* bits.
     cdef SoftColorKey *key = &ctx.colorKeys[n]
     cdef bint noted = arb.softNoted == ctx.space.stamp
     cdef int ia = SoftNotedIndex(arb.softSlotA if noted else 0, arb.body_a, ctx)
@@ -1674,10 +1680,11 @@ cdef inline void SoftCountContact(SoftContext *ctx, cpArbiter *arb, int n, bint 
     key.block = 0
     if ctx.estimating:
         SoftNoteHolding(ctx, arb, key, n)
+    cdef int seen = 0
     if key.a != 0 and key.b != 0 and SoftLighterSide(&ctx.bodies[ia], &ctx.bodies[ib]) != 0:
-        tamias_store(&ctx.ratioPairs, 1)
+        seen = SOFT_SEEN_RATIO
     if arb.e != 0.0:
-        tamias_store(&ctx.elastic, 1)
+        seen |= SOFT_SEEN_ELASTIC
     if atomic:
         if ia != 0:
             tamias_add_int(&ctx.bodies[ia].contacts, 1)
@@ -1688,6 +1695,14 @@ cdef inline void SoftCountContact(SoftContext *ctx, cpArbiter *arb, int n, bint 
             ctx.bodies[ia].contacts += 1
         if ib != 0:
             ctx.bodies[ib].contacts += 1
+    return seen
+
+cdef inline void SoftStoreSeen(SoftContext *ctx, int seen) noexcept nogil:
+    # SoftCountContact's findings over a range of contacts.
+    if seen & SOFT_SEEN_RATIO:
+        tamias_store(&ctx.ratioPairs, 1)
+    if seen & SOFT_SEEN_ELASTIC:
+        tamias_store(&ctx.elastic, 1)
 
 cdef inline void SoftFetchMotion(SoftContext *ctx, int slot) noexcept nogil:
     if 0 < slot < ctx.bodyCount:
@@ -1697,6 +1712,7 @@ cdef void SoftCountRange(SoftContext *ctx, int begin, int end, bint atomic) noex
     cdef cpArray *arbiters = ctx.space.arbiters
     cdef cpArbiter *arb
     cdef int i
+    cdef int seen = 0
     for i in range(begin, end):
         if ctx.fetchAhead and i + SOFT_ARBITER_PREFETCH < end:
             # (Arbiters are scattered: a cache miss each otherwise.)
@@ -1716,7 +1732,8 @@ cdef void SoftCountRange(SoftContext *ctx, int begin, int end, bint atomic) noex
             tamias_store(&ctx.emptyArbiter, 1)
             continue
         ctx.contactSource[i] = i
-        SoftCountContact(ctx, arb, i, atomic)
+        seen |= SoftCountContact(ctx, arb, i, atomic)
+    SoftStoreSeen(ctx, seen)
 
 cdef inline cpVect SoftSlotPosition(SoftContext *ctx, int slot, const cpBody *body) noexcept nogil:
     # A body's position as gathered (slot 0's from the body: static or
