@@ -56,11 +56,12 @@ from tamias2d.constraints cimport tamias_constraint_scale_impulse
 from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, StageResetArbiters,
     cpSpaceProcessComponents, StageFilterArbiterCache, StagePostSolve,
     cpSpaceRejectPair, cpSpaceAcceptCollision, cpSpacePairIsSolid, cpSpacePushFreshContactBuffer,
-    cpContactBufferGetArray, cpContactBufferRoom, cpSpacePushContacts, cpSpaceCollideShapes,
+    cpContactBufferGetArray, cpContactBufferRoom, cpSpaceCollideShapes,
     cpContactBuffer, CP_CONTACTS_BUFFER_SIZE,
     cpShapeUpdateFunc,
     cpSpaceHasHandlers)
 from tamias2d.arbiter cimport cpArbiterUpdate, cpArbiterUnthread, cpArbiterPushThreads
+from tamias2d._private cimport cpSpaceStampArbiter
 from tamias2d._spatialindex cimport (cpSpatialIndexEach, cpSpatialIndexReindexQuery,
     cpSpatialIndexCount)
 from tamias2d.shape cimport cpShapeCacheBB
@@ -851,13 +852,23 @@ cdef void SoftAcceptPlaced(SoftContext *ctx, int i, SoftCandidate *c,
     # The rest of SoftAcceptPair, pair i's contacts being in the contact
     # buffer at `contacts`.
     cdef cpSpace *space = ctx.space
-    cdef cpArbiter *arb
+    cdef cpArbiter *arb = c.arb
+    cdef cpArray *arbiters = space.arbiters
     c.info.arr = contacts
     if c.updated:
-        c.arb.contacts = contacts
-    cpSpacePushContacts(space, c.info.count)
-    arb = cpSpaceAcceptCollision(space, <cpShape *>ctx.pairs[i].a, <cpShape *>ctx.pairs[i].b, &c.info, c.arb,
-                                 c.updated, c.solid if c.updated else -1)
+        arb.contacts = contacts
+    space.contactBuffersHead.numContacts += c.info.count     # (cpSpacePushContacts)
+    if (c.updated and arb.stamp != space.stamp and c.solid and arb.processCollision
+            and arb.state != CP_ARBITER_STATE_IGNORE and arbiters.num < arbiters.max):
+        # cpSpaceAcceptCollision's path for most pairs, inline: an arbiter
+        # from the cache, updated in the narrow phase, and solved. (Two
+        # calls into other modules for each touching pair otherwise.)
+        arbiters.arr[arbiters.num] = arb
+        arbiters.num += 1
+        cpSpaceStampArbiter(space, arb)
+    else:
+        arb = cpSpaceAcceptCollision(space, <cpShape *>ctx.pairs[i].a, <cpShape *>ctx.pairs[i].b,
+                                     &c.info, c.arb, c.updated, c.solid if c.updated else -1)
     if c.arb == NULL and arb != NULL:
         SoftNoteShapes(space, arb, c.info.a, c.info.b)   # (new: not noted in the narrow phase)
     # (The point's age, carried by cpArbiterUpdate; 0 for a new one.)
