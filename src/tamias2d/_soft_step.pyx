@@ -43,7 +43,6 @@ from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArbiter, cpContact, 
     CP_ARBITER_STATE_IGNORE)
 from tamias2d._containers cimport cprealloc, cpfree, cpHashSetFind, cpArrayPush, cpSetOutOfMemory
 from tamias2d._threads cimport (tamias_take_next, tamias_load, tamias_store, tamias_add,
-    tamias_add_int,
     tamias_exchange, tamias_cpu_relax, tamias_yield, tamias_now_ns)
 from cpython.pythread cimport (PyThread_type_lock, PyThread_allocate_lock,
     PyThread_acquire_lock, PyThread_release_lock, WAIT_LOCK)
@@ -1328,23 +1327,19 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
         ctx.estimating = 0      # (out of memory: the flag is up; no estimates)
     ctx.warmCoef = ctx.h / prev_dt if prev_dt != 0.0 else 0.0
     ctx.loadCoef = 1.0 / prev_dt if prev_dt != 0.0 else 0.0
-    # Each body's number of contacts: a contact's load is fully preloaded
-    # only where both of its bodies have at most two (SoftPreload).
     # On the pool; an arbiter without contacts (only after a failed
     # allocation) makes it all be done again here, skipping those.
     tamias_store(&ctx.emptyArbiter, 0)
     tamias_store(&ctx.ratioPairs, 0)
     ctx.blockBodyCount = 0
-    SoftRun(ctx, SOFT_TASK_COUNT, 0, arbiters.num, ctx.threaded)
+    SoftRun(ctx, SOFT_TASK_COUNT, 0, arbiters.num, 0)
     if tamias_load(&ctx.emptyArbiter):
-        for i in range(1, ctx.bodyCount):
-            ctx.bodies[i].contacts = 0
         for i in range(arbiters.num):
             arb = <cpArbiter *>arbiters.arr[i]
             if arb.count <= 0 or arb.contacts == NULL:
                 continue
             ctx.contactSource[n] = i
-            SoftStoreSeen(ctx, SoftCountContact(ctx, arb, n, 0))
+            SoftStoreSeen(ctx, SoftCountContact(ctx, arb, n))
             n += 1
     else:
         n = arbiters.num
@@ -1675,9 +1670,9 @@ cdef enum:
     SOFT_SEEN_RATIO = 1
     SOFT_SEEN_ELASTIC = 2
 
-cdef inline int SoftCountContact(SoftContext *ctx, cpArbiter *arb, int n, bint atomic) noexcept nogil:
-    # Contact n (of arbiter arb): its key and its bodies' counts (slot 0's
-    # count is never read); returns SOFT_SEEN_* bits.
+cdef inline int SoftCountContact(SoftContext *ctx, cpArbiter *arb, int n) noexcept nogil:
+    # Contact n (of arbiter arb): its key; returns SOFT_SEEN_* bits. (Its
+    # bodies' numbers of contacts are counted by the colouring.)
     cdef SoftColorKey *key = &ctx.colorKeys[n]
     cdef bint noted = arb.softNoted == ctx.space.stamp
     cdef int ia = SoftNotedIndex(arb.softSlotA if noted else 0, arb.body_a, ctx)
@@ -1696,16 +1691,6 @@ cdef inline int SoftCountContact(SoftContext *ctx, cpArbiter *arb, int n, bint a
         seen = SOFT_SEEN_RATIO
     if arb.e != 0.0:
         seen |= SOFT_SEEN_ELASTIC
-    if atomic:
-        if ia != 0:
-            tamias_add_int(&ctx.bodies[ia].contacts, 1)
-        if ib != 0:
-            tamias_add_int(&ctx.bodies[ib].contacts, 1)
-    else:
-        if ia != 0:
-            ctx.bodies[ia].contacts += 1
-        if ib != 0:
-            ctx.bodies[ib].contacts += 1
     return seen
 
 cdef inline void SoftStoreSeen(SoftContext *ctx, int seen) noexcept nogil:
@@ -1719,7 +1704,7 @@ cdef inline void SoftFetchMotion(SoftContext *ctx, int slot) noexcept nogil:
     if 0 < slot < ctx.bodyCount:
         tamias_prefetch(&ctx.motion[slot].px)
 
-cdef void SoftCountRange(SoftContext *ctx, int begin, int end, bint atomic) noexcept nogil:
+cdef void SoftCountRange(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef cpArray *arbiters = ctx.space.arbiters
     cdef cpArbiter *arb
     cdef int i
@@ -1743,7 +1728,7 @@ cdef void SoftCountRange(SoftContext *ctx, int begin, int end, bint atomic) noex
             tamias_store(&ctx.emptyArbiter, 1)
             continue
         ctx.contactSource[i] = i
-        seen |= SoftCountContact(ctx, arb, i, atomic)
+        seen |= SoftCountContact(ctx, arb, i)
     SoftStoreSeen(ctx, seen)
 
 cdef inline cpVect SoftSlotPosition(SoftContext *ctx, int slot, const cpBody *body) noexcept nogil:
@@ -1994,6 +1979,13 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
     ctx.overflowCount = 0
     for i in range(n):
         key = &ctx.colorKeys[i]
+        # Each body's number of contacts (slot 0's is never read): a
+        # contact's load is fully preloaded only where both of its bodies
+        # have at most two (SoftPreload, in the preparation after this).
+        # Here, on one thread, rather than in the count on the pool, where
+        # each was an atomic add.
+        ctx.bodies[key.ia].contacts += 1
+        ctx.bodies[key.ib].contacts += 1
         col = SOFT_GRAPH_COLORS
         if key.kind >= 0:
             a = key.a
@@ -3350,7 +3342,7 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
     elif task == SOFT_TASK_GATHER:
         SoftGatherRange(ctx, begin, end)
     elif task == SOFT_TASK_COUNT:
-        SoftCountRange(ctx, begin, end, flag)
+        SoftCountRange(ctx, begin, end)
     elif task == SOFT_TASK_MARK_THREADED:
         SoftMarkThreaded(ctx, begin, end)
     elif task == SOFT_TASK_ESTIMATE_AND_COLOR:
