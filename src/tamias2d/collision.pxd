@@ -48,25 +48,28 @@ cdef cpContactPointSet cpShapesCollide(const cpShape *a, const cpShape *b) noexc
 ctypedef void (*CollisionFunc)(const cpShape *a, const cpShape *b, cpCollisionInfo *info) noexcept nogil
 cdef CollisionFunc CollisionFuncs[9]
 
-# The soft solver's table (cpCollideSoft's), for the inline below.
+# The soft solver's table (cpCollideSoft's), and the slots no sorted pair
+# reaches (they raise the UNSORTED flag).
 cdef CollisionFunc SoftCollisionFuncs[9]
+cdef void CollisionError_(const cpShape *a, const cpShape *b, cpCollisionInfo *info) noexcept nogil
 
-# cpCollideSoft writing into *info, inline: the soft step's narrow phase runs
-# it for every pair its rejection lets through, and the call and the copy of
-# the returned struct cost about as much as a pair of circles' collision.
-cdef inline void cpCollideSoftInto(const cpShape *a, const cpShape *b, cpCollisionID id,
-                                   cpContact *contacts, cpFloat margin,
-                                   cpCollisionInfo *info) noexcept nogil:
+# The collision of a pair by a table, written into *info: cpCollide and
+# cpCollideSoft, and inline in the soft step's narrow phase
+# (cpCollideSoftInto), which runs it for every pair its rejection lets
+# through: there the call and the copy of a returned struct cost about as
+# much as a pair of circles' collision.
+cdef inline void CollideInto(const CollisionFunc *funcs, const cpShape *a, const cpShape *b,
+                             cpCollisionID id, cpContact *contacts, cpFloat margin,
+                             cpCollisionInfo *info) noexcept nogil:
     cdef const cpShape *swap
     cdef unsigned int index
+    # The table holds one function per unordered pair of types. (Sorted in
+    # locals first: through *info each would be read back after a store.)
     if a.klass.type > b.klass.type:
         swap = a
         a = b
         b = swap
     index = <unsigned int>a.klass.type + <unsigned int>b.klass.type * CP_NUM_SHAPES
-    if index >= 9:
-        info[0] = cpCollideSoft(a, b, id, contacts, margin)   # (raises the error flag)
-        return
     info.margin = margin
     info.a = a
     info.b = b
@@ -74,7 +77,15 @@ cdef inline void cpCollideSoftInto(const cpShape *a, const cpShape *b, cpCollisi
     info.n = cpv(0.0, 0.0)
     info.count = 0
     info.arr = contacts
-    SoftCollisionFuncs[index](a, b, info)
+    if index < 9:
+        funcs[index](a, b, info)
+    else:
+        CollisionError_(a, b, info)
+
+cdef inline void cpCollideSoftInto(const cpShape *a, const cpShape *b, cpCollisionID id,
+                                   cpContact *contacts, cpFloat margin,
+                                   cpCollisionInfo *info) noexcept nogil:
+    CollideInto(SoftCollisionFuncs, a, b, id, contacts, margin, info)
 
 # The C shape of a Python Circle/Segment/Poly; TypeError/ValueError (and NULL)
 # for anything else, a bare Shape or a polygon without vertices.

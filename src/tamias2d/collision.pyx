@@ -854,32 +854,11 @@ CollisionFuncs[6] = CircleToPoly
 CollisionFuncs[7] = SegmentToPoly
 CollisionFuncs[8] = PolyToPoly
 
-cdef inline cpCollisionInfo CollideWith(const CollisionFunc *funcs, const cpShape *a,
-                                        const cpShape *b, cpCollisionID id, cpContact *contacts,
-                                        cpFloat margin) noexcept nogil:
-    cdef cpCollisionInfo info
-    cdef unsigned int index
-    info.margin = margin
-    info.a = a
-    info.b = b
-    info.id = id
-    info.n = cpv(0.0, 0.0)
-    info.count = 0
-    info.arr = contacts
-    # The table holds one function per unordered pair of types.
-    if a.klass.type > b.klass.type:
-        info.a = b
-        info.b = a
-    index = <unsigned int>info.a.klass.type + <unsigned int>info.b.klass.type * CP_NUM_SHAPES
-    if index < 9:
-        funcs[index](info.a, info.b, &info)
-    else:
-        CollisionError_(info.a, info.b, &info)
-    return info
-
 cdef cpCollisionInfo cpCollide(const cpShape *a, const cpShape *b, cpCollisionID id,
                                cpContact *contacts, cpFloat margin) noexcept nogil:
-    return CollideWith(CollisionFuncs, a, b, id, contacts, margin)
+    cdef cpCollisionInfo info
+    CollideInto(CollisionFuncs, a, b, id, contacts, margin, &info)
+    return info
 
 # The soft solver's table: Munk2D's, but polygon pairs by separating axes
 # and circles inside polygons by their faces.
@@ -890,7 +869,9 @@ SoftCollisionFuncs[8] = PolyToPolySeparatingAxes
 
 cdef cpCollisionInfo cpCollideSoft(const cpShape *a, const cpShape *b, cpCollisionID id,
                                    cpContact *contacts, cpFloat margin) noexcept nogil:
-    return CollideWith(SoftCollisionFuncs, a, b, id, contacts, margin)
+    cdef cpCollisionInfo info
+    CollideInto(SoftCollisionFuncs, a, b, id, contacts, margin, &info)
+    return info
 
 cdef cpContactPointSet cpShapesCollide(const cpShape *a, const cpShape *b) noexcept nogil:
     cdef cpContact contacts[CP_MAX_CONTACTS_PER_ARBITER]
