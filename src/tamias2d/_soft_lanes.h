@@ -204,8 +204,8 @@ static inline void soft_v2_gather_state(const SoftState *st, const int *idx, int
 }
 static inline void soft_v2_scatter_velocity(SoftState *st, const int *idx, const unsigned char *w,
                                             int k, SoftV2 vx, SoftV2 vy, SoftV2 ww, SoftV2 m) {
-    (void)m;
     SoftV2 row;
+    (void)m;    /* (the AVX2 path writes it back with the row) */
     if (w[k]) {
         row = SOFT_SHUFFLE2(vx, vy, 0, 2);
         memcpy(&SOFT_AT(st, idx[k]).vx, &row, 16);
