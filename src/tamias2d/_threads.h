@@ -13,8 +13,6 @@ static long tamias_load(volatile long *p) { return _InterlockedCompareExchange(p
 static void tamias_store(volatile long *p, long v) { _InterlockedExchange(p, v); }
 static long tamias_add(volatile long *p, long v) { return _InterlockedExchangeAdd(p, v) + v; }
 static long tamias_exchange(volatile long *p, long v) { return _InterlockedExchange(p, v); }
-/* (long is 32 bits on Windows, as int.) */
-static int tamias_add_int(volatile int *p, int v) { return (int)_InterlockedExchangeAdd((volatile long *)p, v) + v; }
 #else
 static long tamias_take_next(volatile long *counter) {
     return __atomic_fetch_add(counter, 1, __ATOMIC_RELAXED);
@@ -25,7 +23,6 @@ static long tamias_add(volatile long *p, long v) { return __atomic_add_fetch(p, 
 static long tamias_exchange(volatile long *p, long v) {
     return __atomic_exchange_n(p, v, __ATOMIC_SEQ_CST);
 }
-static int tamias_add_int(volatile int *p, int v) { return __atomic_add_fetch(p, v, __ATOMIC_RELAXED); }
 #endif
 
 #if defined(_WIN32)

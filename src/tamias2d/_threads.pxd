@@ -5,7 +5,6 @@ cdef extern from "_threads.h" nogil:
     void tamias_store(volatile long *p, long v)
     long tamias_add(volatile long *p, long v)
     long tamias_exchange(volatile long *p, long v)
-    int tamias_add_int(volatile int *p, int v)
     long long tamias_now_ns()
     void tamias_cpu_relax()
     void tamias_yield()
