@@ -295,8 +295,18 @@ static inline SoftV4 *soft_v4_row_out(SoftState *st, const int *idx, const unsig
 static inline void soft_v4_scatter_velocity(SoftState *st, const int *idx, const unsigned char *w,
                                             int k, SoftV4 vx, SoftV4 vy, SoftV4 ww, SoftV4 m) {
     SoftV4 r0, r1, r2, r3, sink;
+    unsigned int every;
     (void)k;
     SOFT_TRANSPOSE4(vx, vy, ww, m, r0, r1, r2, r3);   /* row j: vx, vy, w, m_inv */
+    memcpy(&every, w, sizeof(every));
+    if (every == 0x01010101u) {
+        /* All four sides written back, most lanes of a pile: no selects. */
+        *(SoftV4 *)__builtin_assume_aligned(&SOFT_AT(st, idx[0]).vx, 32) = r0;
+        *(SoftV4 *)__builtin_assume_aligned(&SOFT_AT(st, idx[1]).vx, 32) = r1;
+        *(SoftV4 *)__builtin_assume_aligned(&SOFT_AT(st, idx[2]).vx, 32) = r2;
+        *(SoftV4 *)__builtin_assume_aligned(&SOFT_AT(st, idx[3]).vx, 32) = r3;
+        return;
+    }
     *soft_v4_row_out(st, idx, w, 0, &sink) = r0;
     *soft_v4_row_out(st, idx, w, 1, &sink) = r1;
     *soft_v4_row_out(st, idx, w, 2, &sink) = r2;
