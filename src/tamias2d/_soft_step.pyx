@@ -55,12 +55,12 @@ from tamias2d.constraints cimport tamias_constraint_scale_impulse
 from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, StageResetArbiters,
     cpSpaceProcessComponents, StageFilterArbiterCache, StagePostSolve,
     cpSpaceRejectPair, cpSpaceAcceptCollision, cpSpacePairIsSolid, cpSpacePushFreshContactBuffer,
-    cpContactBufferGetArray, cpContactBufferRoom, cpSpaceCollideShapes,
+    cpContactBufferGetArray, cpContactBufferRoom, cpSpacePushContacts, cpSpaceCollideShapes,
+    cpArbiterIsSolved, cpSpaceAcceptUpdated,
     cpContactBuffer, CP_CONTACTS_BUFFER_SIZE,
     cpShapeUpdateFunc,
     cpSpaceHasHandlers)
 from tamias2d.arbiter cimport cpArbiterUpdate, cpArbiterUnthread, cpArbiterPushThreads
-from tamias2d._private cimport cpSpaceStampArbiter
 from tamias2d._spatialindex cimport (cpSpatialIndexEach, cpSpatialIndexReindexQuery,
     cpSpatialIndexCount)
 from tamias2d.shape cimport cpShapeCacheBB
@@ -402,6 +402,7 @@ cdef void SoftGrowPairs(cpPairCollector *collector) noexcept nogil:
         collector.cap = space.softScratch.cap[SOFT_SCRATCH_PAIRS]
 
 
+# Off only in tests, which check that the guesses change nothing.
 cdef bint _use_guesses = 1
 # The same for keeping the broad phase's walk.
 cdef bint _keep_pairs = 1
@@ -603,8 +604,7 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
                     # cpSpaceAcceptCollision decides of it (the tree reports
                     # each pair once a step, so it is not stamped yet).
                     ctx.pairArbiters[i] = c.arb
-                    if (c.arb.state != CP_ARBITER_STATE_IGNORE and c.arb.processCollision
-                            and c.solid):
+                    if cpArbiterIsSolved(c.arb, c.solid):
                         ctx.touching[i] |= SOFT_PAIR_ACCEPTED
                     if c.info.arr[0].bias < SOFT_YOUNG_AGE:
                         ctx.touching[i] |= SOFT_PAIR_YOUNG
@@ -852,20 +852,12 @@ cdef void SoftAcceptPlaced(SoftContext *ctx, int i, SoftCandidate *c,
     # buffer at `contacts`.
     cdef cpSpace *space = ctx.space
     cdef cpArbiter *arb = c.arb
-    cdef cpArray *arbiters = space.arbiters
     c.info.arr = contacts
     if c.updated:
         arb.contacts = contacts
-    space.contactBuffersHead.numContacts += c.info.count     # (cpSpacePushContacts)
-    if (c.updated and arb.stamp != space.stamp and c.solid and arb.processCollision
-            and arb.state != CP_ARBITER_STATE_IGNORE and arbiters.num < arbiters.max):
-        # cpSpaceAcceptCollision's path for most pairs, inline: an arbiter
-        # from the cache, updated in the narrow phase, and solved. (Two
-        # calls into other modules for each touching pair otherwise.)
-        arbiters.arr[arbiters.num] = arb
-        arbiters.num += 1
-        cpSpaceStampArbiter(space, arb)
-    else:
+    cpSpacePushContacts(space, c.info.count)
+    # (Most pairs inline, without two calls into other modules.)
+    if not (c.updated and cpSpaceAcceptUpdated(space, arb, c.solid)):
         arb = cpSpaceAcceptCollision(space, <cpShape *>ctx.pairs[i].a, <cpShape *>ctx.pairs[i].b,
                                      &c.info, c.arb, c.updated, c.solid if c.updated else -1)
     if c.arb == NULL and arb != NULL:
@@ -1677,6 +1669,7 @@ cdef inline int SoftCountContact(SoftContext *ctx, cpArbiter *arb, int n) noexce
     cdef bint noted = arb.softNoted == ctx.space.stamp
     cdef int ia = SoftNotedIndex(arb.softSlotA if noted else 0, arb.body_a, ctx)
     cdef int ib = SoftNotedIndex(arb.softSlotB if noted else 0, arb.body_b, ctx)
+    cdef int seen = 0
     key.ia = ia
     key.ib = ib
     key.a = ia if SoftMovable(ctx, ia) else 0
@@ -1686,7 +1679,6 @@ cdef inline int SoftCountContact(SoftContext *ctx, cpArbiter *arb, int n) noexce
     key.block = 0
     if ctx.estimating:
         SoftNoteHolding(ctx, arb, key, n)
-    cdef int seen = 0
     if key.a != 0 and key.b != 0 and SoftLighterSide(&ctx.bodies[ia], &ctx.bodies[ib]) != 0:
         seen = SOFT_SEEN_RATIO
     if arb.e != 0.0:

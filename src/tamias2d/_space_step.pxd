@@ -19,14 +19,14 @@ from tamias2d._config cimport (cpFloat, cpBool, cpCollisionID, CP_BUFFER_BYTES,
     CP_MAX_CONTACTS_PER_ARBITER)
 from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArray, cpContact, cpCollisionInfo,
     cpArbiter, cpContactBufferHeader,
-    cpPostStepCallback, cpPostStepFunc, CP_BODY_TYPE_DYNAMIC)
+    cpPostStepCallback, cpPostStepFunc, CP_BODY_TYPE_DYNAMIC, CP_ARBITER_STATE_IGNORE)
 from tamias2d.body cimport cpBodyGetType
 from libc.math cimport sqrt, fmax, INFINITY
 from tamias2d._structs cimport cpConstraint
 from tamias2d.vector cimport cpVect, cpBB, cpvsub, cpvlengthsq
 from tamias2d.shape cimport cpShapeFilterReject
 from tamias2d._bbtree cimport cpBBTreeGetStaticReach
-from tamias2d._private cimport cpConstraintNext
+from tamias2d._private cimport cpConstraintNext, cpSpaceStampArbiter
 
 # -- locking and post-step callbacks ---------------------------------------------------
 cdef void cpSpaceLock(cpSpace *space) noexcept nogil
@@ -50,7 +50,12 @@ cdef struct cpContactBuffer:
 cdef void cpSpacePushFreshContactBuffer(cpSpace *space) noexcept nogil
 # Room for CP_MAX_CONTACTS_PER_ARBITER contacts, or NULL when out of memory.
 cdef cpContact *cpContactBufferGetArray(cpSpace *space) noexcept nogil
-cdef void cpSpacePushContacts(cpSpace *space, int count) noexcept nogil
+# The last collision's `count` contacts onto (or back off) the head buffer.
+cdef inline void cpSpacePushContacts(cpSpace *space, int count) noexcept nogil:
+    space.contactBuffersHead.numContacts += count
+
+cdef inline void cpSpacePopContacts(cpSpace *space, int count) noexcept nogil:
+    space.contactBuffersHead.numContacts -= count
 
 # cpContactBufferGetArray where the head buffer has room (no call: the soft
 # step's serial pass takes one per touching pair).
@@ -86,6 +91,26 @@ cdef cpArbiter *cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
 # not both of infinite mass), which a caller may make beforehand.
 cdef inline bint cpSpacePairIsSolid(const cpShape *a, const cpShape *b) noexcept nogil:
     return not (a.sensor or b.sensor) and not (a.body.m == INFINITY and b.body.m == INFINITY)
+
+# Whether cpSpaceAcceptCollision puts an arbiter of a `solid` pair on the
+# step's list to be solved (not ignored, and its handlers let it).
+cdef inline bint cpArbiterIsSolved(const cpArbiter *arb, bint solid) noexcept nogil:
+    return arb.state != CP_ARBITER_STATE_IGNORE and arb.processCollision and solid
+
+# cpSpaceAcceptCollision's common path, inline (the soft step takes it for
+# most touching pairs): `arb`, found in the cache and updated already (no
+# begin or pre-solve handler), its contacts pushed, goes on the step's list
+# if it is solved and the list has room. False, with nothing done,
+# otherwise: then cpSpaceAcceptCollision(space, a, b, info, arb, 1, solid).
+cdef inline bint cpSpaceAcceptUpdated(cpSpace *space, cpArbiter *arb, bint solid) noexcept nogil:
+    cdef cpArray *arbiters = space.arbiters
+    if (arb.stamp == space.stamp or not cpArbiterIsSolved(arb, solid)
+            or arbiters.num >= arbiters.max):
+        return 0
+    arbiters.arr[arbiters.num] = arb
+    arbiters.num += 1
+    cpSpaceStampArbiter(space, arb)
+    return 1
 # Whether any collision handler of the space acts in one of these phases.
 cdef bint cpSpaceHasHandlers(cpSpace *space, bint begin, bint preSolve,
                              bint postSolve) noexcept nogil

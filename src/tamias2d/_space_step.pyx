@@ -165,11 +165,6 @@ cdef cpContact *cpContactBufferGetArray(cpSpace *space) noexcept nogil:
         return NULL  # out of memory
     return (<cpContactBuffer *>head).contacts + head.numContacts
 
-cdef void cpSpacePushContacts(cpSpace *space, int count) noexcept nogil:
-    space.contactBuffersHead.numContacts += count
-
-cdef inline void cpSpacePopContacts(cpSpace *space, int count) noexcept nogil:
-    space.contactBuffersHead.numContacts -= count
 
 
 # -- collision detection ------------------------------------------------------------------------
@@ -256,8 +251,7 @@ cdef cpArbiter *cpSpaceAcceptCollision(cpSpace *space, cpShape *a, cpShape *b,
     # (Else no handler acts on begin or pre-solve, see `updated`: the calls
     # would only flip `swapped` an even number of times.)
 
-    if (arb.state != CP_ARBITER_STATE_IGNORE and arb.processCollision
-            and (solid > 0 or (solid < 0 and cpSpacePairIsSolid(a, b)))):
+    if cpArbiterIsSolved(arb, solid > 0 or (solid < 0 and cpSpacePairIsSolid(a, b))):
         if not cpArrayPush(space.arbiters, arb):
             pass  # out of memory: the flag is up, the pair goes unsolved
     else:
