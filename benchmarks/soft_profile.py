@@ -12,6 +12,11 @@ scenes are in docs/benchmarks.md.
     PYTHONPATH=src:tests python benchmarks/soft_profile.py [--steps 120] [--quick]
         [--scenes large_pyramid ...] [--sleep 0.5]
 
+Scenes: large_pyramid (built here as Box2D's benchmark builds it),
+many_pyramids and tumbler (built by benchmarks/against_box2d.py), a 20-row
+pyramid, and tests/scenes.py's rain and drum. The default runs all of
+them; many_pyramids (22,000 boxes) takes about a minute.
+
 --sleep sets every scene's sleep_time_threshold (off by default, as in
 benchmarks/against_box2d.py), for the cost of sleeping while a pile is
 still awake.
@@ -21,11 +26,14 @@ import os
 import statistics
 import sys
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "tests"))
+sys.path.insert(0, HERE)
 
 import tamias2d  # noqa: E402
 from tamias2d import _soft_step  # noqa: E402
 import scenes  # noqa: E402
+import against_box2d  # noqa: E402
 
 
 def large_pyramid(base=100):
@@ -49,8 +57,20 @@ def large_pyramid(base=100):
     return space
 
 
+def box2d_scene(name):
+    """A scene of benchmarks/against_box2d.py, built there as tamias2d's."""
+    def build():
+        engine = against_box2d.ChipmunkEngine(tamias2d, "tamias2d", solver="soft")
+        builder, args = against_box2d.SCENES[name][:2]
+        builder(engine, *args)
+        return engine.s
+    return build
+
+
 SCENES = {
     "large_pyramid": large_pyramid,
+    "many_pyramids": box2d_scene("many_pyramids"),
+    "tumbler": box2d_scene("tumbler"),
     "pyramid_20": lambda: large_pyramid(20),
     "rain": lambda: scenes.rain(tamias2d),
     "drum": lambda: scenes.drum(tamias2d),
