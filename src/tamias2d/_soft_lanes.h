@@ -91,6 +91,17 @@ typedef struct {
     double totalNormal[2][SOFT_LANES], totalTangent[2][SOFT_LANES];
 } SoftLanes;
 
+/* The bodies' states a lane reads (each one cache line), fetched
+ * SOFT_FETCH_AHEAD lanes before the kernel reaches it: the lanes stream in
+ * order, which the hardware prefetches, but the states are scattered, and
+ * in a pile larger than a core's L2 cache each one is a miss. */
+#define SOFT_FETCH_AHEAD 4
+#if defined(__GNUC__) || defined(__clang__)
+#define SOFT_FETCH(p) __builtin_prefetch((p), 1)
+#else
+#define SOFT_FETCH(p) ((void)(p))
+#endif
+
 /* A whole number of cache lines (C89 has no static assertion). */
 typedef char soft_lanes_fill_lines[sizeof(SoftLanes) % 64 == 0 ? 1 : -1];
 
@@ -107,6 +118,14 @@ typedef struct {
 /* Far apart: a row with this separation is speculative and its bias keeps
  * its impulse at zero. */
 #define SOFT_LANE_FAR 1e30
+
+static inline void soft_fetch_states(const SoftLanes *c, const SoftState *st) {
+    int k;
+    for (k = 0; k < SOFT_LANES; k++) {
+        SOFT_FETCH(&SOFT_AT(st, c->ia[k]));
+        SOFT_FETCH(&SOFT_AT(st, c->ib[k]));
+    }
+}
 
 static inline void SoftLanesClear(SoftLanes *c, SoftLaneLinks *x, int k) {
     /* Lane k (of a colour's last, part-filled lane) takes no impulse: it
@@ -432,34 +451,36 @@ static inline int SoftLanesSetPath(int path) {
 }
 
 /* The kernels over n lanes from c. */
-static inline void SoftLanesWarmStart(SoftLanes *c, int n, SoftState *st) {
+static inline void SoftLanesWarmStart(SoftLanes *c, int n, SoftState *st, int fetch) {
 #if SOFT_HAVE_AVX2
-    if (soft_lanes_path == SOFT_PATH_AVX2) { soft_warm_start_range_avx2(c, n, st); return; }
+    if (soft_lanes_path == SOFT_PATH_AVX2) { soft_warm_start_range_avx2(c, n, st, fetch); return; }
 #endif
 #if SOFT_HAVE_SIMD
-    if (soft_lanes_path == SOFT_PATH_SIMD) { soft_warm_start_range_simd(c, n, st); return; }
+    if (soft_lanes_path == SOFT_PATH_SIMD) { soft_warm_start_range_simd(c, n, st, fetch); return; }
 #endif
-    soft_warm_start_range_scalar(c, n, st);
+    soft_warm_start_range_scalar(c, n, st, fetch);
 }
 
 /* accumulate (relax passes only): add the lane's impulses to its step
  * totals after solving it, as the substep's last pass does; trackMax: keep
- * the points' largest normal impulses (for restitution). */
+ * the points' largest normal impulses (for restitution); fetch: fetch the
+ * bodies' states SOFT_FETCH_AHEAD lanes ahead (a pile too big for the
+ * cache). */
 static inline void SoftLanesSolve(SoftLanes *c, SoftLaneLinks *x, int n, SoftState *st,
                                   double inv_h, double pushOut, int useBias, int accumulate,
-                                  int trackMax) {
+                                  int trackMax, int fetch) {
 #if SOFT_HAVE_AVX2
     if (soft_lanes_path == SOFT_PATH_AVX2) {
-        soft_solve_range_avx2(c, x, n, st, inv_h, pushOut, useBias, accumulate, trackMax);
+        soft_solve_range_avx2(c, x, n, st, inv_h, pushOut, useBias, accumulate, trackMax, fetch);
         return;
     }
 #endif
 #if SOFT_HAVE_SIMD
     if (soft_lanes_path == SOFT_PATH_SIMD) {
-        soft_solve_range_simd(c, x, n, st, inv_h, pushOut, useBias, accumulate, trackMax);
+        soft_solve_range_simd(c, x, n, st, inv_h, pushOut, useBias, accumulate, trackMax, fetch);
         return;
     }
 #endif
-    soft_solve_range_scalar(c, x, n, st, inv_h, pushOut, useBias, accumulate, trackMax);
+    soft_solve_range_scalar(c, x, n, st, inv_h, pushOut, useBias, accumulate, trackMax, fetch);
 }
 

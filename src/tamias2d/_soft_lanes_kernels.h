@@ -211,20 +211,27 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftLaneLin
 /* The kernels over a range of lanes, each case of the flags its own loop
  * (the flags are constants inside, so the compiler drops what a pass does
  * not do; the arithmetic that stays is the same, so are the bits). */
-static void SOFT_KERNEL(soft_warm_start_range)(SoftLanes *c, int n, SoftState *st) {
+static void SOFT_KERNEL(soft_warm_start_range)(SoftLanes *c, int n, SoftState *st, int fetch) {
     int i;
-    for (i = 0; i < n; i++)
+    for (i = 0; i < n; i++) {
+        if (fetch && i + SOFT_FETCH_AHEAD < n)
+            soft_fetch_states(&c[i + SOFT_FETCH_AHEAD], st);
         SOFT_KERNEL(soft_warm_start)(&c[i], st);
+    }
 }
 
-#define SOFT_SOLVE_LOOP(bias, acc, track) \
-    for (i = 0; i < n; i++) \
-        SOFT_KERNEL(soft_solve)(&c[i], &x[i], st, inv_h, pushOut, (bias), (acc), (track))
+#define SOFT_SOLVE_LOOP(bias, acc, track) do { \
+        for (i = 0; i < n; i++) { \
+            if (fetch && i + SOFT_FETCH_AHEAD < n) \
+                soft_fetch_states(&c[i + SOFT_FETCH_AHEAD], st); \
+            SOFT_KERNEL(soft_solve)(&c[i], &x[i], st, inv_h, pushOut, (bias), (acc), (track)); \
+        } \
+    } while (0)
 
 static void SOFT_KERNEL(soft_solve_range)(SoftLanes *c, SoftLaneLinks *x, int n, SoftState *st,
                                           double inv_h,
                                           double pushOut, int useBias, int accumulate,
-                                          int trackMax) {
+                                          int trackMax, int fetch) {
     int i;
     if (useBias) {
         if (trackMax) SOFT_SOLVE_LOOP(1, 0, 1); else SOFT_SOLVE_LOOP(1, 0, 0);

@@ -209,10 +209,11 @@ cdef extern from "_soft_lanes.h" nogil:
         void *dst[SOFT_LANES]
         cpFloat maxNormalImpulse[2][SOFT_LANES]
     void SoftLanesClear(SoftLanes *c, SoftLaneLinks *x, int k)
-    # n lanes from c (trackMax: keep maxNormalImpulse, which only restitution reads)
-    void SoftLanesWarmStart(SoftLanes *c, int n, SoftState *st)
+    # n lanes from c (trackMax: keep maxNormalImpulse, which only restitution
+    # reads; fetch: fetch the bodies' states a few lanes ahead)
+    void SoftLanesWarmStart(SoftLanes *c, int n, SoftState *st, int fetch)
     void SoftLanesSolve(SoftLanes *c, SoftLaneLinks *x, int n, SoftState *st, cpFloat inv_h,
-                        cpFloat pushOut, int useBias, int accumulate, int trackMax)
+                        cpFloat pushOut, int useBias, int accumulate, int trackMax, int fetch)
     enum: SOFT_PATH_SCALAR, SOFT_PATH_SIMD, SOFT_PATH_AVX2
     void SoftLanesInit()
     int SoftLanesPathAvailable(int path)

@@ -3312,13 +3312,15 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
     elif task == SOFT_TASK_INTEGRATE_POSITIONS:
         SoftIntegratePositions(ctx, begin, end)
     elif task == SOFT_TASK_WARM_START:
-        SoftLanesWarmStart(&ctx.lanes[begin], end - begin, ctx.states)
+        SoftLanesWarmStart(&ctx.lanes[begin], end - begin, ctx.states, ctx.fetchAhead)
     elif task == SOFT_TASK_SOLVE:
         SoftLanesSolve(&ctx.lanes[begin], &ctx.laneLinks[begin], end - begin, ctx.states,
-                       ctx.inv_h, ctx.pushOut, flag, 0, tamias_load(&ctx.elastic) != 0)
+                       ctx.inv_h, ctx.pushOut, flag, 0, tamias_load(&ctx.elastic) != 0,
+                       ctx.fetchAhead)
     elif task == SOFT_TASK_RELAX_ACCUMULATE:
         SoftLanesSolve(&ctx.lanes[begin], &ctx.laneLinks[begin], end - begin, ctx.states,
-                       ctx.inv_h, ctx.pushOut, 0, 1, tamias_load(&ctx.elastic) != 0)
+                       ctx.inv_h, ctx.pushOut, 0, 1, tamias_load(&ctx.elastic) != 0,
+                       ctx.fetchAhead)
     elif task == SOFT_TASK_NARROW:
         SoftNarrowPhase(ctx, begin, end)
     elif task == SOFT_TASK_UNPACK:
