@@ -63,14 +63,16 @@ typedef struct {
  *
  * Laid out by cache lines (64 bytes; the lanes array starts on one and a
  * lane is a whole number of them), in the order the passes read them: the
- * warm start reads lines 0-8; the biased pass 0-7 and 9-12; the relax
- * passes 0-9, 13 and 14, and the last of a substep's also 16-17 (the
- * step's totals); a one-point lane's passes also 15. The passes are bound by
- * the bytes they stream (a large pile's lanes do not fit in a core's L2
+ * warm start reads lines 0-8; the biased pass 0-7 and 9-11; the relax
+ * passes 0-9 and 12, and the last of a substep's also 14-15 (the step's
+ * totals); a one-point lane's passes also 13. The passes are bound by the
+ * bytes they stream (a large pile's lanes do not fit in a core's L2
  * cache), so the lines a pass touches decide its speed: a lane 256 bytes
  * longer made them 11-17% slower; this layout against the fields in their
  * first order (7% fewer bytes): warm start -22%, biased pass -10%, relax -5%
- * on the large pyramid. */
+ * on the large pyramid. For the same reason a lane holds no bias rate (a
+ * step has two, SoftLaneBiasRates) and no tangent mass (the relax passes
+ * work it out from the arms, as the 2x2 normal matrix). */
 typedef struct {
     int points;                           /* 1 or 2: every lane's manifold has that many */
     int ia[SOFT_LANES], ib[SOFT_LANES];   /* SoftState slots, as byte offsets (SOFT_AT) */
@@ -82,12 +84,11 @@ typedef struct {
     double normalImpulse[2][SOFT_LANES];
     double tangentImpulse[2][SOFT_LANES];
     double base[2][SOFT_LANES];           /* adjusted separation */
-    double biasRate[2][SOFT_LANES], compliance[2][SOFT_LANES], preload[2][SOFT_LANES];
-    double tangentMass[2][SOFT_LANES];
+    double compliance[2][SOFT_LANES], preload[2][SOFT_LANES];
     double friction[SOFT_LANES], surfaceT[SOFT_LANES];
     double k11[SOFT_LANES];               /* one-point lanes: the row's effective mass (two-point
                                            * lanes work their 2x2 matrix out from the arms) */
-    double pad16[SOFT_LANES];
+    double pad13[SOFT_LANES];
     double totalNormal[2][SOFT_LANES], totalTangent[2][SOFT_LANES];
 } SoftLanes;
 
@@ -119,6 +120,43 @@ typedef struct {
  * its impulse at zero. */
 #define SOFT_LANE_FAR 1e30
 
+/* A contact's bias rate is its softness's: the static one where a side is
+ * immovable, else the contact one (SoftPrepareContact), so a step has two.
+ * The kernels take a lane's four from a table of the 16 patterns, indexed
+ * by which sides are both movable (wa and wb, already in the lane's first
+ * line): SOFT_LANES doubles of every lane fewer to stream. The index
+ * gathers the low bit of each of the four bytes (wa & wb) into four bits,
+ * by one multiplication; the table is filled through the same function, so
+ * the bit order (the bytes' order in a word) is whatever this machine's
+ * is. */
+#if SOFT_LANES != 4
+#error "soft_lane_rate_index packs four lanes"
+#endif
+static inline unsigned int soft_lane_rate_index(const SoftLanes *c) {
+    unsigned int a, b;
+    memcpy(&a, c->wa, sizeof(a));
+    memcpy(&b, c->wb, sizeof(b));
+    return (((a & b) * 0x08040201u) >> 24) & 15u;
+}
+
+typedef struct {
+    double rate[16][SOFT_LANES];
+} SoftLaneBiasRates;
+
+static inline void SoftLaneBiasRatesFill(SoftLaneBiasRates *t, double contactRate,
+                                         double staticRate) {
+    SoftLanes probe;
+    int pattern, k;
+    for (pattern = 0; pattern < 16; pattern++) {
+        for (k = 0; k < SOFT_LANES; k++) {
+            probe.wa[k] = (unsigned char)((pattern >> k) & 1);
+            probe.wb[k] = 1;
+        }
+        for (k = 0; k < SOFT_LANES; k++)
+            t->rate[soft_lane_rate_index(&probe)][k] = probe.wa[k] ? contactRate : staticRate;
+    }
+}
+
 static inline void soft_fetch_states(const SoftLanes *c, const SoftState *st) {
     int k;
     for (k = 0; k < SOFT_LANES; k++) {
@@ -147,8 +185,7 @@ static inline void SoftLanesClear(SoftLanes *c, SoftLaneLinks *x, int k) {
         c->rBx[p][k] = p == 0 ? 1.0 : -1.0;
         c->rAy[p][k] = c->rBy[p][k] = 0.0;
         c->base[p][k] = SOFT_LANE_FAR;
-        c->biasRate[p][k] = c->compliance[p][k] = c->preload[p][k] = 0.0;
-        c->tangentMass[p][k] = 0.0;
+        c->compliance[p][k] = c->preload[p][k] = 0.0;
         c->normalImpulse[p][k] = c->tangentImpulse[p][k] = 0.0;
         x->maxNormalImpulse[p][k] = 0.0;
         c->totalNormal[p][k] = c->totalTangent[p][k] = 0.0;
@@ -467,20 +504,21 @@ static inline void SoftLanesWarmStart(SoftLanes *c, int n, SoftState *st, int fe
  * bodies' states SOFT_FETCH_AHEAD lanes ahead (a pile too big for the
  * cache). */
 static inline void SoftLanesSolve(SoftLanes *c, SoftLaneLinks *x, int n, SoftState *st,
+                                  const SoftLaneBiasRates *rates,
                                   double inv_h, double pushOut, int useBias, int accumulate,
                                   int trackMax, int fetch) {
 #if SOFT_HAVE_AVX2
     if (soft_lanes_path == SOFT_PATH_AVX2) {
-        soft_solve_range_avx2(c, x, n, st, inv_h, pushOut, useBias, accumulate, trackMax, fetch);
+        soft_solve_range_avx2(c, x, n, st, rates, inv_h, pushOut, useBias, accumulate, trackMax, fetch);
         return;
     }
 #endif
 #if SOFT_HAVE_SIMD
     if (soft_lanes_path == SOFT_PATH_SIMD) {
-        soft_solve_range_simd(c, x, n, st, inv_h, pushOut, useBias, accumulate, trackMax, fetch);
+        soft_solve_range_simd(c, x, n, st, rates, inv_h, pushOut, useBias, accumulate, trackMax, fetch);
         return;
     }
 #endif
-    soft_solve_range_scalar(c, x, n, st, inv_h, pushOut, useBias, accumulate, trackMax, fetch);
+    soft_solve_range_scalar(c, x, n, st, rates, inv_h, pushOut, useBias, accumulate, trackMax, fetch);
 }
 

@@ -54,7 +54,9 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_warm_start)(SoftLanes *c, SoftSt
 /* trackMax: keep each point's largest normal impulse of the step (only
  * restitution reads it, so a step without elastic contacts skips it). */
 static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftLaneLinks *x,
-                                                       SoftState *st, double inv_h_s,
+                                                       SoftState *st,
+                                                       const SoftLaneBiasRates *rates,
+                                                       double inv_h_s,
                                                        double pushOut_s, int useBias, int accumulate,
                                                        int trackMax) {
     int k, j;
@@ -77,6 +79,9 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftLaneLin
         V lin, x01, x02, k11, k12, k22, a11, a22, q1, q2, det, x1, x2, y1, z2, n1, n2, d1, d2, imp;
         M ok1, ok2, ok3, ok4;
         int points = c->points;
+        V biasRate = zero;
+        if (useBias)
+            biasRate = L(rates->rate[soft_lane_rate_index(c)]);
         for (j = 0; j < 2; j++) {
             if (j == 1 && points == 1)
                 break;
@@ -94,7 +99,7 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftLaneLin
                  * the push-out cap applies beyond what holds the rest. */
                 V x0 = L(c->normalImpulse[j]), pre = L(c->preload[j]);
                 V g = L(c->compliance[j]);
-                V b = L(c->biasRate[j]) * s;
+                V b = biasRate * s;
                 V lim;
                 held[j] = V_SEL(V_LT(x0, pre), x0, pre);
                 lim = negPush - (points == 2 ? KJJ(j) : L(c->k11)) * g * (x0 - held[j]);
@@ -185,7 +190,11 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftLaneLin
                 V old = L(c->tangentImpulse[j]);
                 V maxF = mu * L(c->normalImpulse[j]);
                 V negMaxF = -maxF;
-                V tImp = old - L(c->tangentMass[j]) * vt;
+                /* The tangent mass as SoftPrepareContact works it out (the
+                 * same expression, so the same bits; 0 for an empty lane). */
+                V kT = (mA + mB) + iA * rtA * rtA + iB * rtB * rtB;
+                V tangentMass = V_SEL(V_GT(kT, zero), one / kT, zero);
+                V tImp = old - tangentMass * vt;
                 tImp = V_SEL(V_LT(tImp, negMaxF), negMaxF, V_SEL(V_GT(tImp, maxF), maxF, tImp));
                 S(c->tangentImpulse[j], tImp);
                 imp = tImp - old;
@@ -224,12 +233,12 @@ static void SOFT_KERNEL(soft_warm_start_range)(SoftLanes *c, int n, SoftState *s
         for (i = 0; i < n; i++) { \
             if (fetch && i + SOFT_FETCH_AHEAD < n) \
                 soft_fetch_states(&c[i + SOFT_FETCH_AHEAD], st); \
-            SOFT_KERNEL(soft_solve)(&c[i], &x[i], st, inv_h, pushOut, (bias), (acc), (track)); \
+            SOFT_KERNEL(soft_solve)(&c[i], &x[i], st, rates, inv_h, pushOut, (bias), (acc), (track)); \
         } \
     } while (0)
 
 static void SOFT_KERNEL(soft_solve_range)(SoftLanes *c, SoftLaneLinks *x, int n, SoftState *st,
-                                          double inv_h,
+                                          const SoftLaneBiasRates *rates, double inv_h,
                                           double pushOut, int useBias, int accumulate,
                                           int trackMax, int fetch) {
     int i;

@@ -196,10 +196,8 @@ cdef extern from "_soft_lanes.h" nogil:
         cpFloat rBx[2][SOFT_LANES]
         cpFloat rBy[2][SOFT_LANES]
         cpFloat base[2][SOFT_LANES]
-        cpFloat biasRate[2][SOFT_LANES]
         cpFloat compliance[2][SOFT_LANES]
         cpFloat preload[2][SOFT_LANES]
-        cpFloat tangentMass[2][SOFT_LANES]
         cpFloat normalImpulse[2][SOFT_LANES]
         cpFloat tangentImpulse[2][SOFT_LANES]
         cpFloat totalNormal[2][SOFT_LANES]
@@ -208,11 +206,15 @@ cdef extern from "_soft_lanes.h" nogil:
         int src[SOFT_LANES]
         void *dst[SOFT_LANES]
         cpFloat maxNormalImpulse[2][SOFT_LANES]
+    ctypedef struct SoftLaneBiasRates:
+        pass
+    void SoftLaneBiasRatesFill(SoftLaneBiasRates *t, cpFloat contactRate, cpFloat staticRate)
     void SoftLanesClear(SoftLanes *c, SoftLaneLinks *x, int k)
     # n lanes from c (trackMax: keep maxNormalImpulse, which only restitution
     # reads; fetch: fetch the bodies' states a few lanes ahead)
     void SoftLanesWarmStart(SoftLanes *c, int n, SoftState *st, int fetch)
-    void SoftLanesSolve(SoftLanes *c, SoftLaneLinks *x, int n, SoftState *st, cpFloat inv_h,
+    void SoftLanesSolve(SoftLanes *c, SoftLaneLinks *x, int n, SoftState *st,
+                        const SoftLaneBiasRates *rates, cpFloat inv_h,
                         cpFloat pushOut, int useBias, int accumulate, int trackMax, int fetch)
     enum: SOFT_PATH_SCALAR, SOFT_PATH_SIMD, SOFT_PATH_AVX2
     void SoftLanesInit()

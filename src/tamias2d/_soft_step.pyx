@@ -250,6 +250,7 @@ cdef struct SoftContext:
     cpFloat warmCoef, loadCoef   # last step's impulses to this substep's, to a load
     SoftLanes *lanes          # the coloured contacts, colour by colour
     SoftLaneLinks *laneLinks  # beside each lane: its contacts' sources and destinations
+    SoftLaneBiasRates laneBiasRates   # the lanes' bias rates, by their sides (SoftPrepareLanes)
     int colorLanes[SOFT_GRAPH_COLORS + 1]   # colour c: lanes[colorLanes[c]:colorLanes[c+1]]
     int colorPairEnd[SOFT_GRAPH_COLORS]     # its two-point lanes end here, its one-point ones follow
     int *overflow             # SoftContact indices solved one by one
@@ -2043,6 +2044,8 @@ cdef void SoftPrepareLanes(SoftContext *ctx) noexcept nogil:
     # where restitution will read it (SoftPackLanes).
     cdef int i
     cdef SoftContact *sc
+    # (The two bias rates SoftPrepareContact gives, by the lanes' sides.)
+    SoftLaneBiasRatesFill(&ctx.laneBiasRates, ctx.contactSoft.biasRate, ctx.staticSoft.biasRate)
     SoftRun(ctx, SOFT_TASK_PACK, 0, ctx.contactCount, 0)
     for i in range(ctx.overflowCount):
         sc = &ctx.contacts[ctx.overflow[i]]
@@ -2138,10 +2141,8 @@ cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, SoftLaneLinks *links, in
         ln.rBx[j][k] = sp.rBx
         ln.rBy[j][k] = sp.rBy
         ln.base[j][k] = sp.baseSeparation
-        ln.biasRate[j][k] = sp.biasRate
         ln.compliance[j][k] = sp.compliance
         ln.preload[j][k] = sp.preload
-        ln.tangentMass[j][k] = sp.tangentMass
         ln.normalImpulse[j][k] = sp.normalImpulse
         ln.tangentImpulse[j][k] = sp.tangentImpulse
         links.maxNormalImpulse[j][k] = 0.0
@@ -3315,11 +3316,11 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
         SoftLanesWarmStart(&ctx.lanes[begin], end - begin, ctx.states, ctx.fetchAhead)
     elif task == SOFT_TASK_SOLVE:
         SoftLanesSolve(&ctx.lanes[begin], &ctx.laneLinks[begin], end - begin, ctx.states,
-                       ctx.inv_h, ctx.pushOut, flag, 0, tamias_load(&ctx.elastic) != 0,
+                       &ctx.laneBiasRates, ctx.inv_h, ctx.pushOut, flag, 0, tamias_load(&ctx.elastic) != 0,
                        ctx.fetchAhead)
     elif task == SOFT_TASK_RELAX_ACCUMULATE:
         SoftLanesSolve(&ctx.lanes[begin], &ctx.laneLinks[begin], end - begin, ctx.states,
-                       ctx.inv_h, ctx.pushOut, 0, 1, tamias_load(&ctx.elastic) != 0,
+                       &ctx.laneBiasRates, ctx.inv_h, ctx.pushOut, 0, 1, tamias_load(&ctx.elastic) != 0,
                        ctx.fetchAhead)
     elif task == SOFT_TASK_NARROW:
         SoftNarrowPhase(ctx, begin, end)
