@@ -51,7 +51,13 @@ except ImportError:  # run from a checkout that is not installed
     sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "src"))
     import tamias2d
 import pymunk
-import pyb2d3 as b2
+
+# pyb2d3 imports numpy, whose OpenBLAS starts a thread per core that spins
+# for a while (3% of a tumbler run's samples under `perf record`): on a
+# two-core machine that takes time from the engines measured, most of all
+# from the two-thread rows. Nothing here calls BLAS.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+import pyb2d3 as b2  # noqa: E402
 
 from harness import box2d_shape_def
 
