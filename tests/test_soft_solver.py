@@ -1481,6 +1481,22 @@ def test_vector_and_scalar_kernels_give_the_same_bits(scene):
             assert repr(v) == repr(s), f"{path}, body {i}: {v} != {s}"
 
 
+def test_a_lane_takes_the_bias_rate_of_each_contacts_softness():
+    # A lane holds no bias rates: the kernels pick each contact's from the
+    # step's two by its sides' write flags. A contact with an immovable side
+    # (a flag 0; empty lanes have both 0) takes the static softness's, as
+    # SoftPrepareContact gives it, the others the contact softness's; every
+    # one of the 256 patterns of a lane's flags, with rates that differ in
+    # their last bit too.
+    from tamias2d import _soft_step
+    contact, static = 1.0 / 3.0, math.nextafter(1.0 / 3.0, 1.0)
+    picked = _soft_step._lane_bias_rates(contact, static)
+    assert len(picked) == 256
+    for (wa, wb), rates in picked.items():
+        expected = tuple(contact if a and b else static for a, b in zip(wa, wb))
+        assert rates == expected, (wa, wb, rates)
+
+
 def test_an_unknown_kernel_path_is_refused():
     from tamias2d import _soft_step
     with pytest.raises(ValueError, match="no contact-kernel path"):

@@ -207,8 +207,9 @@ cdef extern from "_soft_lanes.h" nogil:
         void *dst[SOFT_LANES]
         cpFloat maxNormalImpulse[2][SOFT_LANES]
     ctypedef struct SoftLaneBiasRates:
-        pass
+        cpFloat rate[16][SOFT_LANES]
     void SoftLaneBiasRatesFill(SoftLaneBiasRates *t, cpFloat contactRate, cpFloat staticRate)
+    unsigned int soft_lane_rate_index(const SoftLanes *c)
     void SoftLanesClear(SoftLanes *c, SoftLaneLinks *x, int k)
     # n lanes from c (trackMax: keep maxNormalImpulse, which only restitution
     # reads; fetch: fetch the bodies' states a few lanes ahead)

@@ -3648,6 +3648,29 @@ def _lanes_paths():
     SSE2 or NEON) and "avx2" (four doubles, x86-64 CPUs with AVX2)."""
     return tuple(name for name, path in _LANE_PATHS.items() if SoftLanesPathAvailable(path))
 
+def _lane_bias_rates(double contact_rate, double static_rate):
+    """For tests: the bias rates the contact kernels take for a lane, by its
+    four contacts' write flags (wa, wb: the side is movable), for all 256
+    patterns: {(wa, wb): (rate of contact 0, ..., 3)} with wa and wb tuples
+    of 0 and 1 (SoftLaneBiasRatesFill's table, soft_lane_rate_index's
+    pick)."""
+    cdef SoftLaneBiasRates table
+    cdef SoftLanes probe
+    cdef unsigned int index
+    cdef int a, b, k
+    SoftLaneBiasRatesFill(&table, contact_rate, static_rate)
+    picked = {}
+    for a in range(16):
+        for b in range(16):
+            for k in range(SOFT_LANES):
+                probe.wa[k] = (a >> k) & 1
+                probe.wb[k] = (b >> k) & 1
+            index = soft_lane_rate_index(&probe)
+            picked[(tuple((a >> k) & 1 for k in range(SOFT_LANES)),
+                    tuple((b >> k) & 1 for k in range(SOFT_LANES)))] = tuple(
+                table.rate[index][k] for k in range(SOFT_LANES))
+    return picked
+
 def _lanes_path(name=None):
     """The path the contact kernels take (and, given `name`, set it first;
     for tests, which check that all paths give the same bits)."""
