@@ -914,23 +914,23 @@ cdef void SoftResetArbiters(SoftContext *ctx) noexcept nogil:
                 ctx.threadedCount = arbiters.num
                 arbiters.num = 0
                 return
-            # (Some were marked before the pooled one was found: the marks
-            # are read only by this step's SoftRethreadArbiters, which the
-            # full reset below does without, and the state is NORMAL either
-            # way.)
+            # (Some were reset before the pooled one was found: NORMAL, as
+            # the full reset below makes them.)
     StageResetArbiters(space)
 
 cdef void SoftMarkThreaded(SoftContext *ctx, int begin, int end) noexcept nogil:
     # Last step's arbiters [begin, end), kept threaded: their state reset as
-    # StageResetArbiters does and each marked as threaded (on the pool: a
-    # cache miss per arbiter, which two cores wait out side by side).
+    # StageResetArbiters does (on the pool: a cache miss per arbiter, which
+    # two cores wait out side by side). Most are NORMAL already and are only
+    # read, so their lines are not written back; which of them were
+    # threaded is marked only if this step's arbiters turn out to differ
+    # (SoftRethreadArbiters).
     cdef cpArray *arbiters = ctx.space.arbiters
-    cdef cpTimestamp stamp = ctx.space.stamp
     cdef cpArbiter *arb
     cdef int i
     for i in range(begin, end):
         if ctx.fetchAhead and i + SOFT_ARBITER_PREFETCH < end:
-            tamias_prefetch_write(&(<cpArbiter *>arbiters.arr[i + SOFT_ARBITER_PREFETCH]).state)
+            tamias_prefetch(&(<cpArbiter *>arbiters.arr[i + SOFT_ARBITER_PREFETCH]).state)
         arb = <cpArbiter *>arbiters.arr[i]
         if not arb.cached:
             # Pooled while threaded by a step at collision persistence 0
@@ -939,8 +939,8 @@ cdef void SoftMarkThreaded(SoftContext *ctx, int begin, int end) noexcept nogil:
             # thread goes first (SoftResetArbiters).
             tamias_store(&ctx.uncachedArbiter, 1)
             return
-        arb.state = CP_ARBITER_STATE_NORMAL
-        arb.softThreaded = stamp
+        if arb.state != CP_ARBITER_STATE_NORMAL:
+            arb.state = CP_ARBITER_STATE_NORMAL
 
 cdef bint SoftRethreadArbiters(SoftContext *ctx, int collided) noexcept nogil:
     # Whether this step's arbiters are threaded already (else
@@ -971,6 +971,11 @@ cdef bint SoftRethreadArbiters(SoftContext *ctx, int collided) noexcept nogil:
             if not cpBodyIsSleeping(arb.body_a) and not cpBodyIsSleeping(arb.body_b):
                 cpArbiterUnthread(arb)
         return 0
+    # Last step's arbiters, all still threaded, are marked; this step's that
+    # are marked stay, the others are threaded; last step's still marked
+    # after that are unthreaded.
+    for i in range(ctx.threadedCount):
+        (<cpArbiter *>saved[i]).softThreaded = space.stamp
     for i in range(collided):
         arb = <cpArbiter *>space.arbiters.arr[i]
         if arb.softThreaded == space.stamp:
