@@ -18,11 +18,10 @@
 from tamias2d._config cimport (cpFloat, cpBool, cpCollisionID, CP_BUFFER_BYTES,
     CP_MAX_CONTACTS_PER_ARBITER)
 from tamias2d._structs cimport (cpSpace, cpBody, cpShape, cpArray, cpContact, cpCollisionInfo,
-    cpArbiter, cpContactBufferHeader,
+    cpArbiter, cpContactBufferHeader, cpConstraint,
     cpPostStepCallback, cpPostStepFunc, CP_BODY_TYPE_DYNAMIC, CP_ARBITER_STATE_IGNORE)
 from tamias2d.body cimport cpBodyGetType
 from libc.math cimport sqrt, fmax, INFINITY
-from tamias2d._structs cimport cpConstraint
 from tamias2d.vector cimport cpVect, cpBB, cpvsub, cpvlengthsq
 from tamias2d.shape cimport cpShapeFilterReject
 from tamias2d._bbtree cimport cpBBTreeGetStaticReach

@@ -9,7 +9,7 @@ themselves. The world (cpSpace.c) and the ``Space`` class are in
 ``space.pyx``; the queries in ``_space_query.pyx``; the contact solver of one
 arbiter in ``arbiter.pyx`` and the joints' in ``constraints.pyx``.
 """
-from libc.math cimport INFINITY, pow, sqrt, fmax
+from libc.math cimport INFINITY, pow
 from libc.string cimport memcpy
 
 from tamias2d._config cimport (cpFloat, cpBool, cpHashValue, cpCollisionID, cpTimestamp,
@@ -25,12 +25,12 @@ from tamias2d._containers cimport (cpcalloc, cpfree, cpArrayPush, cpArrayPop,
     cpHashSetFilter, cpHashSetCount)
 from tamias2d._spatialindex cimport (cpSpatialIndexEach, cpSpatialIndexInsert, cpSpatialIndexRemove,
     cpSpatialIndexReindexQuery)
-from tamias2d.vector cimport cpVect, cpBB, cpvsub, cpvlengthsq, cpBBIntersects
+from tamias2d.vector cimport cpVect, cpvlengthsq
 from tamias2d.body cimport (cpBodyActivate, cpBodyGetType, cpBodyIsSleeping,
     cpBodyKineticEnergy, tamias_BodySpaceHooks, tamias_set_body_space_hooks)
-from tamias2d.shape cimport cpShapeCacheBB, cpShapeFilterReject
+from tamias2d.shape cimport cpShapeCacheBB
 from tamias2d.collision cimport cpCollide
-from tamias2d._bbtree cimport cpBBTreeSetStaticReach, cpBBTreeGetStaticReach
+from tamias2d._bbtree cimport cpBBTreeSetStaticReach
 from tamias2d.arbiter cimport (cpArbiterInit, cpArbiterUpdate, cpArbiterPreStep,
     cpArbiterApplyCachedImpulse, cpArbiterApplyImpulse, cpArbiterUnthread, cpCollisionDoNothing,
     cpArbiterPushThreads)
@@ -164,7 +164,6 @@ cdef cpContact *cpContactBufferGetArray(cpSpace *space) noexcept nogil:
     if head == NULL or head.numContacts + CP_MAX_CONTACTS_PER_ARBITER > CP_CONTACTS_BUFFER_SIZE:
         return NULL  # out of memory
     return (<cpContactBuffer *>head).contacts + head.numContacts
-
 
 
 # -- collision detection ------------------------------------------------------------------------
