@@ -798,6 +798,11 @@ def main(argv=None):
         # would not make (SOFT_FETCH_MIN_CONTACTS): on odd seeds always.
         from tamias2d import _soft_step
         _soft_step._fetch_min_contacts_set(0)
+    if args.seed % 3 == 0:
+        # Substeps run group by group (SoftFindGroups), which a scene of the
+        # fuzzer's size would not be: on every third seed, groups of two.
+        from tamias2d import _soft_step
+        _soft_step._group_contacts_set(2)
     log = open(args.log, "w") if args.log else sys.stdout
     fz = (SleepFuzzer if args.mode == "sleep" else Fuzzer)(tamias2d, args.seed, log, args.solver,
                                                           args.threads)

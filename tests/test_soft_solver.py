@@ -1713,6 +1713,125 @@ def _switch_scene(name):
     return _SWITCH_SCENES.get(name) or (lambda: getattr(scenes, name)(tamias2d))
 
 
+def _separate_piles(kinematic_floor=False, joint=False):
+    # Eight small pyramids apart on one static ground (or, with
+    # kinematic_floor, on a slow kinematic board under the first two), and
+    # bouncy balls dropped on them: many separate piles, some elastic.
+    s = tamias2d.Space()
+    s.gravity = 0, -900
+    ground = tamias2d.Segment(s.static_body, (-2000, 0), (2000, 0), 2)
+    ground.friction = 0.8
+    s.add(ground)
+    floor = None
+    if kinematic_floor:
+        floor = tamias2d.Body(body_type=tamias2d.Body.KINEMATIC)
+        floor.position = -1400, 8
+        floor.velocity = 2, 0
+        board = tamias2d.Poly.create_box(floor, (500, 10))
+        board.friction = 0.8
+        s.add(floor, board)
+    boxes = []
+    for pile in range(8):
+        x0 = -1500 + 400 * pile
+        base = 12 if floor is not None and pile < 2 else 2
+        for row in range(4):
+            for col in range(4 - row):
+                b = tamias2d.Body(1, tamias2d.moment_for_box(1, (20, 20)))
+                b.position = x0 + 21 * col + 10.5 * row, base + 11 + 21 * row
+                box = tamias2d.Poly.create_box(b, (20, 20))
+                box.friction = 0.8
+                s.add(b, box)
+                boxes.append(b)
+        ball = tamias2d.Body(1, tamias2d.moment_for_circle(1, 0, 8))
+        ball.position = x0 + 30, 200
+        circle = tamias2d.Circle(ball, 8)
+        circle.elasticity = 0.8
+        s.add(ball, circle)
+    if joint:
+        s.add(tamias2d.PinJoint(boxes[0], boxes[1]))
+    return s
+
+
+_SWITCH_SCENES["separate_piles"] = _separate_piles
+
+
+@pytest.mark.parametrize("scene", ["separate_piles", "rain", "mixed", "add_remove",
+                                   "type_changes", "sleepy_pile"])
+def test_contact_groups_change_nothing(scene):
+    # On one thread, contacts that share no movable body, directly or
+    # through others, may run their substeps one group after the other
+    # (SoftFindGroups): the same operations on each contact and body in the
+    # same order, so the same bits as all groups in step. Groups of a few
+    # contacts here, so that these small scenes are grouped.
+    from tamias2d import _soft_step
+    build = _switch_scene(scene)
+    before = _soft_step._group_contacts_set(0)
+    try:
+        grouped = _soft_step._grouped_steps_count()
+        in_step = _state_after(build, 240)
+        assert _soft_step._grouped_steps_count() == grouped
+        _soft_step._group_contacts_set(4)
+        by_groups = _state_after(build, 240)
+        assert _soft_step._grouped_steps_count() > grouped, "no step was grouped: nothing was tested"
+    finally:
+        _soft_step._group_contacts_set(before)
+    assert len(by_groups) == len(in_step)
+    for i, (g, a) in enumerate(zip(by_groups, in_step)):
+        assert repr(g) == repr(a), f"body {i}: {g} != {a}"
+
+
+@pytest.mark.parametrize("case", ["kinematic", "joint"])
+def test_contact_groups_only_where_nothing_joins_them(case):
+    # A kinematic body in a contact moves within the step and may touch
+    # several piles; a joint is solved beside every group's contacts. Such
+    # steps are not grouped.
+    from tamias2d import _soft_step
+    before = _soft_step._group_contacts_set(1)
+    try:
+        s = _separate_piles(kinematic_floor=case == "kinematic", joint=case == "joint")
+        s.solver = "soft"
+        grouped = _soft_step._grouped_steps_count()
+        for _ in range(60):
+            s.step(DT)
+        assert _soft_step._grouped_steps_count() == grouped
+        # (The same scene without what joins it is grouped.)
+        plain = _separate_piles()
+        plain.solver = "soft"
+        for _ in range(60):
+            plain.step(DT)
+        assert _soft_step._grouped_steps_count() > grouped
+    finally:
+        _soft_step._group_contacts_set(before)
+
+
+def test_contact_groups_on_two_threads_change_nothing():
+    # On two threads each thread runs whole groups' substeps: the same bits
+    # as one thread, grouped or not.
+    from tamias2d import _soft_step
+    before = _soft_step._group_contacts_set(0)
+    threads_before = _soft_step._threaded_min_contacts_set(0)
+
+    def two_threads():
+        s = _separate_piles()
+        s.threaded = True
+        s.threads = 2
+        return s
+    try:
+        one = _state_after(_separate_piles, 240)
+        _soft_step._group_contacts_set(4)
+        grouped = _soft_step._grouped_steps_count()
+        handed = _soft_step._pool_state()[1]
+        two = _state_after(two_threads, 240)
+        assert _soft_step._grouped_steps_count() > grouped
+        assert _soft_step._pool_state()[1] > handed, "the pool ran nothing: nothing was tested"
+    finally:
+        _soft_step._group_contacts_set(before)
+        _soft_step._threaded_min_contacts_set(threads_before)
+    assert len(two) == len(one)
+    for i, (t, o) in enumerate(zip(two, one)):
+        assert repr(t) == repr(o), f"body {i}: {t} != {o}"
+
+
 @pytest.mark.parametrize("scene", ["pyramid", "add_remove", "type_changes", "sleepy_pile",
                                    "static_changes", "rain_persistence_0"])
 def test_kept_broad_phase_walks_change_nothing(scene):

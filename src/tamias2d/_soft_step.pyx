@@ -156,6 +156,7 @@ cdef enum:
     SOFT_SCRATCH_BLOCK_CACHE  # each block's matrix and factors for the step (SoftBlockCache)
     SOFT_SCRATCH_COMPONENTS   # the sleeping components' union-find (cpSpaceProcessComponents)
     SOFT_SCRATCH_LOADS        # the piles' loads from their weights (SoftEstimateLoads)
+    SOFT_SCRATCH_GROUPS       # the contact groups solved one after the other (SoftFindGroups)
     SOFT_SCRATCH_COUNT
 
 # (cpSoftScratch holds 24 buffers.)
@@ -253,6 +254,11 @@ cdef struct SoftContext:
     SoftLaneBiasRates laneBiasRates   # the lanes' bias rates, by their sides (SoftPrepareLanes)
     int colorLanes[SOFT_GRAPH_COLORS + 1]   # colour c: lanes[colorLanes[c]:colorLanes[c+1]]
     int colorPairEnd[SOFT_GRAPH_COLORS]     # its two-point lanes end here, its one-point ones follow
+    int groupCount            # 0: one plan of colours for all lanes; else the lanes group by group (SoftColorGroups)
+    int *groupLanes           # group g's colorLanes: groupLanes[g * (SOFT_GRAPH_COLORS + 1):]
+    int *groupPairEnd         # ... and its colorPairEnd: groupPairEnd[g * SOFT_GRAPH_COLORS:]
+    int *groupBodies          # the body slots, group by group, then those of no group
+    int *groupBodyStart       # group g's: groupBodies[groupBodyStart[g]:groupBodyStart[g + 1]] (g <= groupCount)
     int *overflow             # SoftContact indices solved one by one
     volatile long shapesUpdated   # by SoftUpdateShapes
     int *contactSlots         # each contact's lane slot (lane * SOFT_LANES + k; -1: the overflow)
@@ -477,6 +483,11 @@ cdef enum:
     # 1-1.5% faster at 1,800-2,200, 10% at 2,800, 18% on Box2D's large
     # pyramid (15,000).
     SOFT_FETCH_MIN_CONTACTS = 1536
+    # About this many contacts make a group (SoftFindGroups): their lanes and
+    # their bodies' states, about 0.6 MB, stay in a core's L2 cache through
+    # the 16 passes of the step's substeps. (On many_pyramids 2,048 was 3%
+    # faster than 4,096 or 8,192; 1,024 no faster.)
+    SOFT_GROUP_CONTACTS = 2048
 
 # What the narrow phase found of a pair (SoftContext.touching), so that the
 # serial pass after it reads one byte per pair, not the pair's candidate.
@@ -1939,6 +1950,11 @@ cdef bint SoftReserveColors(SoftContext *ctx) noexcept nogil:
     cdef cpSpace *space = ctx.space
     cdef int n = ctx.contactCount
     cdef int lanes = (n + SOFT_LANES - 1) // SOFT_LANES + 2 * SOFT_GRAPH_COLORS
+    if SoftMayGroup(ctx):
+        # (Each group's colours may end in a part-full lane of each kind.)
+        lanes += SoftMostGroups(ctx) * 2 * SOFT_GRAPH_COLORS
+        if SoftReserveGroups(ctx) == NULL:
+            return 0
     return (_reserve(space, SOFT_SCRATCH_BITS, ctx.bodyCount, sizeof(uint32_t)) != NULL
             and _reserve(space, SOFT_SCRATCH_COLORS, n, sizeof(int)) != NULL
             and _reserve(space, SOFT_SCRATCH_OVERFLOW, n, sizeof(int)) != NULL
@@ -1963,7 +1979,10 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
     cdef int counts[2][SOFT_GRAPH_COLORS]    # [points - 1][colour]
     cdef int fill[2][SOFT_GRAPH_COLORS]
     cdef int start[2][SOFT_GRAPH_COLORS]     # first lane of each kind
-    cdef int kind, lanes
+    cdef int kind, lanes, groups
+    cdef bint grouping
+    cdef int *parent = NULL
+    cdef int largest = 1
     used = <uint32_t *>_reserve(space, SOFT_SCRATCH_BITS, ctx.bodyCount, sizeof(uint32_t))
     color = <int *>_reserve(space, SOFT_SCRATCH_COLORS, n, sizeof(int))
     ctx.overflow = <int *>_reserve(space, SOFT_SCRATCH_OVERFLOW, n, sizeof(int))
@@ -1975,8 +1994,16 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
             counts[kind][c] = 0
             fill[kind][c] = 0
     ctx.overflowCount = 0
+    ctx.groupCount = 0
+    grouping = SoftMayGroup(ctx)
+    if grouping:
+        parent = SoftReserveGroups(ctx)
+        if parent == NULL:
+            return 0
     for i in range(n):
         key = &ctx.colorKeys[i]
+        if grouping:
+            grouping = SoftGroupJoin(parent, parent + ctx.bodyCount, key, &largest)
         # Each body's number of contacts (slot 0's is never read): a
         # contact's load is fully preloaded only where both of its bodies
         # have at most two (SoftPreload, in the preparation after this).
@@ -2008,6 +2035,12 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
         else:
             counts[key.kind][col] += 1
     tamias_add(&_overflow_total, ctx.overflowCount)
+    # (Not where one pile holds nearly every body: one group, and the
+    # contacts' pass to find it for nothing.)
+    if grouping and ctx.overflowCount == 0 and 10 * largest < 9 * (ctx.bodyCount - 1):
+        groups = SoftFindGroups(ctx, parent)
+        if groups >= 2:
+            return SoftColorGroups(ctx, color, groups)
     total = 0
     for c in range(SOFT_GRAPH_COLORS):
         ctx.colorLanes[c] = total
@@ -2042,6 +2075,237 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
                 SoftLanesClear(&ctx.lanes[start[kind][c] + i // SOFT_LANES],
                                &ctx.laneLinks[start[kind][c] + i // SOFT_LANES], i % SOFT_LANES)
     return 1
+
+# -- contact groups: the substeps of a part of the scene at a time ---------------------
+# Contacts that share no movable body, directly or through others, do not
+# act on each other within a step: their substeps can run one group after
+# the other instead of all in step, with the same operations on each
+# contact and body in the same order, so the same bits. A scene of many
+# separate piles whose lanes do not fit in a core's cache (Box2D's
+# many_pyramids: 15 MB) then reads each group's lanes from memory once a
+# step and from the cache in its other 15 passes, where all in step every
+# pass streamed them all. On two threads each takes whole groups, with no
+# wait between the passes. Only where nothing else runs between the
+# passes: no joints, no contact solved outside the colours, no Python
+# velocity or position function, no kinematic body in a contact (it moves
+# in every substep and may touch several piles).
+
+cdef bint SoftMayGroup(SoftContext *ctx) noexcept nogil:
+    # (The colouring finds the rest: no kinematic body in a contact, and
+    # none in the overflow.)
+    return (_group_contacts > 0 and ctx.contactCount >= 2 * _group_contacts
+            and ctx.blockBodyCount == 0
+            and ctx.space.constraints.num == 0 and not ctx.livePositions
+            and not ctx.serialVelocities and not ctx.serialPositions)
+
+cdef inline int SoftMostGroups(SoftContext *ctx) noexcept nogil:
+    # (SoftFindGroups starts a group after _group_contacts contacts at least.)
+    return ctx.contactCount // _group_contacts + 2
+
+cdef int *SoftReserveGroups(SoftContext *ctx) noexcept nogil:
+    # The groups' buffer (NULL: out of memory), each body slot its own
+    # root. From its start: each slot's parent, its root's group, each
+    # contact's group and kind, then SoftColorGroups' lists.
+    cdef int n = ctx.contactCount
+    cdef int bodies = ctx.bodyCount
+    cdef int most = SoftMostGroups(ctx)
+    cdef int i
+    cdef int *parent = <int *>_reserve(ctx.space, SOFT_SCRATCH_GROUPS,
+                                       3 * bodies + n + (most + 2) + most * (4 * SOFT_GRAPH_COLORS + 1),
+                                       sizeof(int))
+    if parent != NULL:
+        for i in range(bodies):
+            parent[i] = i
+            parent[bodies + i] = 1      # (its component's bodies, while joining)
+    return parent
+
+cdef inline int SoftGroupRoot(int *parent, int slot) noexcept nogil:
+    while parent[slot] != slot:
+        parent[slot] = parent[parent[slot]]
+        slot = parent[slot]
+    return slot
+
+cdef inline bint SoftGroupJoin(int *parent, int *size, const SoftColorKey *key,
+                               int *largest) noexcept nogil:
+    # Contact key's bodies into one component (the smaller under the
+    # larger), the largest component's size kept; 0 where the contacts
+    # cannot be grouped (a kinematic body, or none movable).
+    cdef int a, b
+    if (key.ia != 0 and key.a == 0) or (key.ib != 0 and key.b == 0) or (key.a == 0 and key.b == 0):
+        return 0
+    if key.a != 0 and key.b != 0:
+        a = SoftGroupRoot(parent, key.a)
+        b = SoftGroupRoot(parent, key.b)
+        if a != b:
+            if size[a] < size[b]:
+                a, b = b, a
+            parent[b] = a
+            size[a] += size[b]
+            if size[a] > largest[0]:
+                largest[0] = size[a]
+    return 1
+
+cdef int SoftFindGroups(SoftContext *ctx, int *parent) noexcept nogil:
+    # The components the colouring joined (SoftGroupJoin) put in groups of
+    # about _group_contacts contacts, in arbiter order; each contact's
+    # group and kind noted (group * 2 + kind). Returns the number of groups.
+    cdef int n = ctx.contactCount
+    cdef int *rootGroup = parent + ctx.bodyCount
+    cdef int *contactGroup = rootGroup + ctx.bodyCount
+    cdef SoftColorKey *key
+    cdef int i, r, current = -1, currentContacts = 0
+    for i in range(ctx.bodyCount):
+        rootGroup[i] = -1
+    for i in range(n):
+        key = &ctx.colorKeys[i]
+        r = SoftGroupRoot(parent, key.a if key.a != 0 else key.b)
+        if rootGroup[r] < 0:
+            if current < 0 or currentContacts >= _group_contacts:
+                current += 1
+                currentContacts = 0
+            rootGroup[r] = current
+        if rootGroup[r] == current:
+            currentContacts += 1
+        contactGroup[i] = rootGroup[r] * 2 + key.kind
+    return current + 1
+
+cdef bint SoftColorGroups(SoftContext *ctx, int *color, int groups) noexcept nogil:
+    # SoftColorContacts' lanes laid out group by group (each group's
+    # colours, two-point lanes first), and its lane slots given in arbiter
+    # order; the bodies listed group by group. color[] holds each contact's
+    # colour (none is in the overflow) and becomes its lane slot.
+    cdef int n = ctx.contactCount
+    cdef int bodies = ctx.bodyCount
+    cdef int *parent = <int *>ctx.space.softScratch.buf[SOFT_SCRATCH_GROUPS]
+    cdef int *rootGroup = parent + bodies
+    cdef int *contactGroup = rootGroup + bodies
+    cdef int *bodyList = contactGroup + n
+    cdef int *bodyStart = bodyList + bodies
+    cdef int *lanesOf = bodyStart + (groups + 2)
+    cdef int *pairEnd = lanesOf + groups * (SOFT_GRAPH_COLORS + 1)
+    cdef int *next = pairEnd + groups * SOFT_GRAPH_COLORS    # [group][kind][colour]
+    cdef int i, g, c, kind, idx, total, count, lanes, slot
+    memset(next, 0, <size_t>groups * 2 * SOFT_GRAPH_COLORS * sizeof(int))
+    for i in range(n):
+        next[contactGroup[i] * SOFT_GRAPH_COLORS + color[i]] += 1
+    total = 0
+    for idx in range(groups * 2 * SOFT_GRAPH_COLORS):
+        total += (next[idx] + SOFT_LANES - 1) // SOFT_LANES
+    ctx.lanes = <SoftLanes *>_reserve_lines(ctx.space, SOFT_SCRATCH_LANES, total, sizeof(SoftLanes))
+    ctx.laneLinks = <SoftLaneLinks *>_reserve(ctx.space, SOFT_SCRATCH_LANE_LINKS, total,
+                                              sizeof(SoftLaneLinks))
+    if ctx.lanes == NULL or ctx.laneLinks == NULL:
+        return 0
+    # Each (group, colour, kind)'s first slot in next[], its empty slots
+    # cleared (SoftColorContacts' reason).
+    total = 0
+    for g in range(groups):
+        for c in range(SOFT_GRAPH_COLORS):
+            lanesOf[g * (SOFT_GRAPH_COLORS + 1) + c] = total
+            for kind in range(1, -1, -1):
+                if kind == 0:
+                    pairEnd[g * SOFT_GRAPH_COLORS + c] = total
+                idx = (g * 2 + kind) * SOFT_GRAPH_COLORS + c
+                count = next[idx]
+                lanes = (count + SOFT_LANES - 1) // SOFT_LANES
+                for slot in range(count, lanes * SOFT_LANES):
+                    SoftLanesClear(&ctx.lanes[total + slot // SOFT_LANES],
+                                   &ctx.laneLinks[total + slot // SOFT_LANES], slot % SOFT_LANES)
+                next[idx] = total * SOFT_LANES
+                total += lanes
+        lanesOf[g * (SOFT_GRAPH_COLORS + 1) + SOFT_GRAPH_COLORS] = total
+    ctx.colorLanes[SOFT_GRAPH_COLORS] = total
+    for i in range(n):
+        idx = contactGroup[i] * SOFT_GRAPH_COLORS + color[i]
+        color[i] = next[idx]
+        next[idx] += 1
+    ctx.contactSlots = color
+    # The bodies by group (counting sort, in slot order within each); the
+    # last list, `groups`, holds the bodies in no contact.
+    for g in range(groups + 2):
+        bodyStart[g] = 0
+    for i in range(1, bodies):
+        g = rootGroup[SoftGroupRoot(parent, i)]
+        bodyStart[(g if g >= 0 else groups) + 1] += 1
+    for g in range(groups + 1):
+        bodyStart[g + 1] += bodyStart[g]
+    for i in range(1, bodies):
+        g = rootGroup[SoftGroupRoot(parent, i)]
+        if g < 0:
+            g = groups
+        bodyList[bodyStart[g]] = i
+        bodyStart[g] += 1
+    for g in range(groups, 0, -1):
+        bodyStart[g] = bodyStart[g - 1]
+    bodyStart[0] = 0
+    ctx.groupCount = groups
+    ctx.groupLanes = lanesOf
+    ctx.groupPairEnd = pairEnd
+    ctx.groupBodies = bodyList
+    ctx.groupBodyStart = bodyStart
+    return 1
+
+cdef void SoftSubstepGroup(SoftContext *ctx, int g, bint marks) noexcept nogil:
+    # Group g's substeps: cpSoftStep's loop without joints over the group's
+    # bodies and lanes, each pass as SoftWarmStart, SoftSolve and SoftRelax
+    # make it (their overflow and blocks are empty here). g == groupCount:
+    # the bodies in no contact. marks: the stage profile's, on one thread.
+    cdef const int *lanes = NULL
+    cdef const int *pairEnd = NULL
+    cdef int first = ctx.groupBodyStart[g]
+    cdef int end = ctx.groupBodyStart[g + 1]
+    cdef bint contacts = g < ctx.groupCount
+    cdef bint trackMax = tamias_load(&ctx.elastic) != 0
+    cdef int k, r, c, i
+    if contacts:
+        lanes = &ctx.groupLanes[g * (SOFT_GRAPH_COLORS + 1)]
+        pairEnd = &ctx.groupPairEnd[g * SOFT_GRAPH_COLORS]
+    for k in range(ctx.substeps):
+        for i in range(first, end):
+            SoftIntegrateVelocity(ctx, ctx.groupBodies[i], k == ctx.substeps - 1)
+        if marks:
+            SoftProfileMark(SOFT_STAGE_INTEGRATE)
+        if contacts:
+            for c in range(SOFT_GRAPH_COLORS):
+                SoftLanesWarmStart(&ctx.lanes[lanes[c]], lanes[c + 1] - lanes[c], ctx.states,
+                                   ctx.fetchAhead)
+            if marks:
+                SoftProfileMark(SOFT_STAGE_WARM_START)
+            for c in range(SOFT_GRAPH_COLORS):
+                SoftLanesSolve(&ctx.lanes[lanes[c]], &ctx.laneLinks[lanes[c]], lanes[c + 1] - lanes[c],
+                               ctx.states, &ctx.laneBiasRates, ctx.inv_h, ctx.pushOut, 1, 0, trackMax,
+                               ctx.fetchAhead)
+            if marks:
+                SoftProfileMark(SOFT_STAGE_SOLVE)
+        for i in range(first, end):
+            SoftIntegratePosition(ctx, ctx.groupBodies[i])
+        if marks:
+            SoftProfileMark(SOFT_STAGE_INTEGRATE)
+        if contacts:
+            for r in range(SOFT_RELAX_ITERATIONS - 1):
+                for c in range(SOFT_GRAPH_COLORS):
+                    SoftLanesSolve(&ctx.lanes[lanes[c]], &ctx.laneLinks[lanes[c]], pairEnd[c] - lanes[c],
+                                   ctx.states, &ctx.laneBiasRates, ctx.inv_h, ctx.pushOut, 0, 0,
+                                   trackMax, ctx.fetchAhead)
+            for c in range(SOFT_GRAPH_COLORS):
+                SoftLanesSolve(&ctx.lanes[lanes[c]], &ctx.laneLinks[lanes[c]], lanes[c + 1] - lanes[c],
+                               ctx.states, &ctx.laneBiasRates, ctx.inv_h, ctx.pushOut, 0, 1, trackMax,
+                               ctx.fetchAhead)
+            if marks:
+                SoftProfileMark(SOFT_STAGE_RELAX)
+
+cdef void SoftSubstepGroups(SoftContext *ctx) noexcept nogil:
+    # Every group's substeps, then those of the bodies in no contact: on
+    # two threads each takes whole groups (the profile counts all of it as
+    # relax passes).
+    cdef int g
+    tamias_add(&_grouped_steps, 1)
+    if ctx.threaded:
+        SoftRun(ctx, SOFT_TASK_GROUPS, 0, ctx.groupCount + 1, 0)
+        SoftProfileMark(SOFT_STAGE_RELAX)
+        return
+    for g in range(ctx.groupCount + 1):
+        SoftSubstepGroup(ctx, g, 1)
 
 cdef void SoftPrepareLanes(SoftContext *ctx) noexcept nogil:
     # The coloured contacts prepared straight into their lanes (on the
@@ -3132,101 +3396,103 @@ cdef void SoftStoreImpulses(SoftContext *ctx, int begin, int end) noexcept nogil
 cdef void SoftIntegrateVelocities(SoftContext *ctx, int begin, int end, bint last) noexcept nogil:
     # Bodies [begin, end) (slot 0 excluded by the callers).
     cdef int i
-    cdef SoftBody *sb
-    cdef SoftState *st
+    for i in range(begin, end):
+        SoftIntegrateVelocity(ctx, i, last)
+
+cdef inline void SoftIntegrateVelocity(SoftContext *ctx, int i, bint last) noexcept nogil:
+    cdef SoftBody *sb = &ctx.bodies[i]
+    cdef SoftState *st = &ctx.states[i]
     cdef SoftMotion *mo
     cdef cpBody *body
     cdef cpFloat damping = ctx.damping
     cdef cpFloat h = ctx.h
     cdef cpVect f
     cdef cpFloat t
-    for i in range(begin, end):
-        sb = &ctx.bodies[i]
-        st = &ctx.states[i]
-        if sb.flags & SOFT_BODY_DEFAULT_VELOCITY:
-            if sb.flags & SOFT_BODY_KINEMATIC:
-                continue
-            # cpBodyUpdateVelocity's arithmetic; the force applies in every
-            # substep and is cleared when the step ends.
-            mo = &ctx.motion[i]
-            if ctx.livePositions:
-                # A Python velocity_func may have pushed this body since.
-                SoftGatherMotion(ctx, i, sb.body)
-            st.vx = st.vx * damping + mo.ax * h
-            st.vy = st.vy * damping + mo.ay * h
-            st.w = st.w * damping + mo.alpha * h
-        else:
-            body = sb.body
-            body.v.x = st.vx
-            body.v.y = st.vy
-            body.w = st.w
-            f = body.f
-            t = body.t
-            body.velocity_func(body, cpv(ctx.gx, ctx.gy), damping, h)
-            st.vx = body.v.x
-            st.vy = body.v.y
-            st.w = body.w
-            if not last:
-                # Body.update_velocity clears the force: keep it for the
-                # remaining substeps.
-                body.f = f
-                body.t = t
+    if sb.flags & SOFT_BODY_DEFAULT_VELOCITY:
+        if sb.flags & SOFT_BODY_KINEMATIC:
+            return
+        # cpBodyUpdateVelocity's arithmetic; the force applies in every
+        # substep and is cleared when the step ends.
+        mo = &ctx.motion[i]
+        if ctx.livePositions:
+            # A Python velocity_func may have pushed this body since.
+            SoftGatherMotion(ctx, i, sb.body)
+        st.vx = st.vx * damping + mo.ax * h
+        st.vy = st.vy * damping + mo.ay * h
+        st.w = st.w * damping + mo.alpha * h
+    else:
+        body = sb.body
+        body.v.x = st.vx
+        body.v.y = st.vy
+        body.w = st.w
+        f = body.f
+        t = body.t
+        body.velocity_func(body, cpv(ctx.gx, ctx.gy), damping, h)
+        st.vx = body.v.x
+        st.vy = body.v.y
+        st.w = body.w
+        if not last:
+            # Body.update_velocity clears the force: keep it for the
+            # remaining substeps.
+            body.f = f
+            body.t = t
 
 cdef void SoftIntegratePositions(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef int i
-    cdef SoftBody *sb
-    cdef SoftState *st
+    for i in range(begin, end):
+        SoftIntegratePosition(ctx, i)
+
+cdef inline void SoftIntegratePosition(SoftContext *ctx, int i) noexcept nogil:
+    cdef SoftBody *sb = &ctx.bodies[i]
+    cdef SoftState *st = &ctx.states[i]
     cdef SoftMotion *mo
     cdef cpBody *body
     cdef cpFloat h = ctx.h
     cdef cpFloat dx, dy, da, qc, qs, mag, px0, py0, a0
-    for i in range(begin, end):
-        sb = &ctx.bodies[i]
-        st = &ctx.states[i]
-        body = sb.body
-        if sb.flags & SOFT_BODY_DEFAULT_POSITION:
-            dx = st.vx * h
-            dy = st.vy * h
-            da = st.w * h
-            mo = &ctx.motion[i]
-            mo.px = mo.px + dx
-            mo.py = mo.py + dy
-            mo.a = mo.a + da
-            if ctx.livePositions or (sb.flags & SOFT_BODY_JOINTED):
-                body.p.x = mo.px
-                body.p.y = mo.py
-                body.a = mo.a
-                if ctx.livePositions and not (sb.flags & SOFT_BODY_JOINTED):
-                    # As cpBodyUpdatePosition: Body.position is read from the
-                    # transform (jointed bodies get theirs below).
-                    SoftSetTransform(body)
-        else:
-            body.v.x = st.vx
-            body.v.y = st.vy
-            body.w = st.w
-            px0 = body.p.x
-            py0 = body.p.y
-            a0 = body.a
-            body.position_func(body, h)
-            dx = body.p.x - px0
-            dy = body.p.y - py0
-            da = body.a - a0
-            st.vx = body.v.x
-            st.vy = body.v.y
-            st.w = body.w
-        st.dpx += dx
-        st.dpy += dy
-        # The step's rotation, advanced by da and renormalised (no trig).
-        qc = st.qc - da * st.qs
-        qs = st.qs + da * st.qc
-        mag = sqrt(qc * qc + qs * qs)
-        if mag > 0.0:
-            mag = 1.0 / mag
-        st.qc = qc * mag
-        st.qs = qs * mag
-        if sb.flags & SOFT_BODY_JOINTED:
-            # The joints' preStep reads the transform.
-            SoftSetTransform(body)
+    body = sb.body
+    if sb.flags & SOFT_BODY_DEFAULT_POSITION:
+        dx = st.vx * h
+        dy = st.vy * h
+        da = st.w * h
+        mo = &ctx.motion[i]
+        mo.px = mo.px + dx
+        mo.py = mo.py + dy
+        mo.a = mo.a + da
+        if ctx.livePositions or (sb.flags & SOFT_BODY_JOINTED):
+            body.p.x = mo.px
+            body.p.y = mo.py
+            body.a = mo.a
+            if ctx.livePositions and not (sb.flags & SOFT_BODY_JOINTED):
+                # As cpBodyUpdatePosition: Body.position is read from the
+                # transform (jointed bodies get theirs below).
+                SoftSetTransform(body)
+    else:
+        body.v.x = st.vx
+        body.v.y = st.vy
+        body.w = st.w
+        px0 = body.p.x
+        py0 = body.p.y
+        a0 = body.a
+        body.position_func(body, h)
+        dx = body.p.x - px0
+        dy = body.p.y - py0
+        da = body.a - a0
+        st.vx = body.v.x
+        st.vy = body.v.y
+        st.w = body.w
+    st.dpx += dx
+    st.dpy += dy
+    # The step's rotation, advanced by da and renormalised (no trig).
+    qc = st.qc - da * st.qs
+    qs = st.qs + da * st.qc
+    mag = sqrt(qc * qc + qs * qs)
+    if mag > 0.0:
+        mag = 1.0 / mag
+    st.qc = qc * mag
+    st.qs = qs * mag
+    if sb.flags & SOFT_BODY_JOINTED:
+        # The joints' preStep reads the transform.
+        SoftSetTransform(body)
 
 cdef void SoftFinishBodies(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef int i
@@ -3282,6 +3548,7 @@ cdef enum:
     SOFT_TASK_COUNT
     SOFT_TASK_MARK_THREADED
     SOFT_TASK_ESTIMATE_AND_COLOR
+    SOFT_TASK_GROUPS          # whole groups' substeps (SoftSubstepGroup)
 
 cdef enum:
     SOFT_CHUNK_LANES = 32         # lanes of contacts per chunk
@@ -3351,6 +3618,9 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
                 SoftEstimateLoads(ctx)
             else:
                 ctx.colored = SoftColorContacts(ctx)
+    elif task == SOFT_TASK_GROUPS:
+        for i in range(begin, end):
+            SoftSubstepGroup(ctx, i, 0)
 
 cdef void SoftTakeChunks(bint caller) noexcept nogil:
     # The caller takes chunks from the front, the worker from the back: in
@@ -3385,7 +3655,7 @@ cdef void SoftRun(SoftContext *ctx, int task, int begin, int end, bint flag) noe
         chunk = SOFT_CHUNK_CONTACTS
     elif task == SOFT_TASK_NARROW:
         chunk = SOFT_CHUNK_PAIRS
-    elif task == SOFT_TASK_ESTIMATE_AND_COLOR:
+    elif task == SOFT_TASK_ESTIMATE_AND_COLOR or task == SOFT_TASK_GROUPS:
         chunk = 1
     cdef int k
     if end <= begin:
@@ -3462,6 +3732,11 @@ cdef void SoftWorkerMain(void *arg) noexcept nogil:
 # SOFT_FETCH_MIN_CONTACTS, but for tests, which check that fetching ahead
 # changes no bits, and measurements (_fetch_min_contacts_set).
 cdef int _fetch_min_contacts = SOFT_FETCH_MIN_CONTACTS
+
+# SOFT_GROUP_CONTACTS, but for tests, which check that grouping changes no
+# bits, and measurements (_group_contacts_set; 0: never group).
+cdef int _group_contacts = SOFT_GROUP_CONTACTS
+cdef volatile long _grouped_steps = 0
 
 # SOFT_THREADED_MIN_CONTACTS, but for tests and the fuzzer, which run small
 # scenes on the pool (_threaded_min_contacts_set).
@@ -3551,6 +3826,7 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     ctx.elastic = 0
     ctx.jointBodyCount = 0
     ctx.overflowCount = 0
+    ctx.groupCount = 0
     ctx.colorLanes[SOFT_GRAPH_COLORS] = 0
     ctx.serialVelocities = 0
     ctx.serialPositions = 0
@@ -3607,22 +3883,25 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
         SoftPrepareLanes(&ctx)
     SoftProfileMark(SOFT_STAGE_PREPARE)
     if ready:
-        for k in range(ctx.substeps):
-            SoftRun(&ctx, SOFT_TASK_INTEGRATE_VELOCITIES, 1, ctx.bodyCount, k == ctx.substeps - 1)
-            SoftProfileMark(SOFT_STAGE_INTEGRATE)
-            SoftJointsWarmStart(&ctx)
-            SoftWarmStart(&ctx)
-            SoftProfileMark(SOFT_STAGE_WARM_START)
-            SoftJointsSolve(&ctx, 1)
-            SoftSolve(&ctx, 1)
-            SoftProfileMark(SOFT_STAGE_SOLVE)
-            SoftRun(&ctx, SOFT_TASK_INTEGRATE_POSITIONS, 1, ctx.bodyCount, 0)
-            SoftProfileMark(SOFT_STAGE_INTEGRATE)
-            SoftJointsRefresh(&ctx)
-            for r in range(SOFT_RELAX_ITERATIONS):
-                SoftJointsSolve(&ctx, 0)
-                SoftRelax(&ctx, r == SOFT_RELAX_ITERATIONS - 1)
-            SoftProfileMark(SOFT_STAGE_RELAX)
+        if ctx.groupCount > 0:
+            SoftSubstepGroups(&ctx)
+        else:
+            for k in range(ctx.substeps):
+                SoftRun(&ctx, SOFT_TASK_INTEGRATE_VELOCITIES, 1, ctx.bodyCount, k == ctx.substeps - 1)
+                SoftProfileMark(SOFT_STAGE_INTEGRATE)
+                SoftJointsWarmStart(&ctx)
+                SoftWarmStart(&ctx)
+                SoftProfileMark(SOFT_STAGE_WARM_START)
+                SoftJointsSolve(&ctx, 1)
+                SoftSolve(&ctx, 1)
+                SoftProfileMark(SOFT_STAGE_SOLVE)
+                SoftRun(&ctx, SOFT_TASK_INTEGRATE_POSITIONS, 1, ctx.bodyCount, 0)
+                SoftProfileMark(SOFT_STAGE_INTEGRATE)
+                SoftJointsRefresh(&ctx)
+                for r in range(SOFT_RELAX_ITERATIONS):
+                    SoftJointsSolve(&ctx, 0)
+                    SoftRelax(&ctx, r == SOFT_RELAX_ITERATIONS - 1)
+                SoftProfileMark(SOFT_STAGE_RELAX)
         if tamias_load(&ctx.elastic):
             SoftRun(&ctx, SOFT_TASK_UNPACK, 0, ctx.colorLanes[SOFT_GRAPH_COLORS], 0)
             SoftApplyRestitution(&ctx)
@@ -3733,6 +4012,24 @@ def _fetch_min_contacts_set(count=None):
             raise ValueError("count must be >= 0")
         _fetch_min_contacts = count
     return before
+
+def _group_contacts_set(count=None):
+    """About how many contacts make a group whose substeps run one after the
+    other's on one thread (SoftFindGroups; a step groups from twice that
+    many), and, given `count`, set it first: 0 never groups, a small number
+    groups small scenes (for tests, which check that grouping changes no
+    bits). Returns the value before."""
+    global _group_contacts
+    before = _group_contacts
+    if count is not None:
+        if count < 0:
+            raise ValueError("count must be >= 0")
+        _group_contacts = count
+    return before
+
+def _grouped_steps_count():
+    """Steps so far (all spaces) whose substeps ran group by group."""
+    return tamias_load(&_grouped_steps)
 
 def _threaded_min_contacts_set(count=None):
     """The fewest arbiters (last step's) a threaded space's soft step needs
