@@ -2245,11 +2245,18 @@ cdef bint SoftColorGroups(SoftContext *ctx, int *color, int groups) noexcept nog
     ctx.groupBodyStart = bodyStart
     return 1
 
+cdef inline bint SoftGroupsFinish(SoftContext *ctx) noexcept nogil:
+    # Whether each group also finishes the step for its contacts and bodies:
+    # where no contact is elastic (restitution, after every group's
+    # substeps, reads them all).
+    return tamias_load(&ctx.elastic) == 0
+
 cdef void SoftSubstepGroup(SoftContext *ctx, int g, bint marks) noexcept nogil:
     # Group g's substeps: cpSoftStep's loop without joints over the group's
     # bodies and lanes, each pass as SoftWarmStart, SoftSolve and SoftRelax
-    # make it (their overflow and blocks are empty here). g == groupCount:
-    # the bodies in no contact. marks: the stage profile's, on one thread.
+    # make it (their overflow and blocks are empty here), then, where
+    # SoftGroupsFinish, its part of the step's finish. g == groupCount: the
+    # bodies in no contact. marks: the stage profile's, on one thread.
     cdef const int *lanes = NULL
     cdef const int *pairEnd = NULL
     cdef int first = ctx.groupBodyStart[g]
@@ -2293,6 +2300,18 @@ cdef void SoftSubstepGroup(SoftContext *ctx, int g, bint marks) noexcept nogil:
                                ctx.fetchAhead)
             if marks:
                 SoftProfileMark(SOFT_STAGE_RELAX)
+    if SoftGroupsFinish(ctx):
+        # The step's impulses into the arbiters and the bodies written back
+        # while the group's lanes and states are in cache (cpSoftStep's
+        # finish, group by group: each writes its own contacts and bodies).
+        if contacts:
+            SoftUnpackLanes(ctx, lanes[0], lanes[SOFT_GRAPH_COLORS], 1)
+        for i in range(first, end):
+            if ctx.fetchAhead and i + SOFT_BODY_PREFETCH < end:
+                SoftFetchLines(ctx.bodies[ctx.groupBodies[i + SOFT_BODY_PREFETCH]].body, sizeof(cpBody))
+            SoftFinishBody(ctx, ctx.groupBodies[i])
+        if marks:
+            SoftProfileMark(SOFT_STAGE_FINISH)
 
 cdef void SoftSubstepGroups(SoftContext *ctx) noexcept nogil:
     # Every group's substeps, then those of the bodies in no contact: on
@@ -3496,28 +3515,28 @@ cdef inline void SoftIntegratePosition(SoftContext *ctx, int i) noexcept nogil:
 
 cdef void SoftFinishBodies(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef int i
-    cdef SoftBody *sb
-    cdef SoftState *st
-    cdef cpBody *body
     for i in range(begin, end):
         if ctx.fetchAhead and i + SOFT_BODY_PREFETCH < end:
             SoftFetchLines(ctx.bodies[i + SOFT_BODY_PREFETCH].body, sizeof(cpBody))
-        sb = &ctx.bodies[i]
-        st = &ctx.states[i]
-        body = sb.body
-        if sb.flags & SOFT_BODY_DEFAULT_POSITION:
-            body.p.x = ctx.motion[i].px
-            body.p.y = ctx.motion[i].py
-            body.a = ctx.motion[i].a
-        body.v.x = st.vx
-        body.v.y = st.vy
-        body.w = st.w
-        body.v_bias = cpv(0.0, 0.0)
-        body.w_bias = 0.0
-        if (sb.flags & SOFT_BODY_DEFAULT_VELOCITY) and not (sb.flags & SOFT_BODY_KINEMATIC):
-            body.f = cpv(0.0, 0.0)
-            body.t = 0.0
-        SoftSetTransform(body)
+        SoftFinishBody(ctx, i)
+
+cdef inline void SoftFinishBody(SoftContext *ctx, int i) noexcept nogil:
+    cdef SoftBody *sb = &ctx.bodies[i]
+    cdef SoftState *st = &ctx.states[i]
+    cdef cpBody *body = sb.body
+    if sb.flags & SOFT_BODY_DEFAULT_POSITION:
+        body.p.x = ctx.motion[i].px
+        body.p.y = ctx.motion[i].py
+        body.a = ctx.motion[i].a
+    body.v.x = st.vx
+    body.v.y = st.vy
+    body.w = st.w
+    body.v_bias = cpv(0.0, 0.0)
+    body.w_bias = 0.0
+    if (sb.flags & SOFT_BODY_DEFAULT_VELOCITY) and not (sb.flags & SOFT_BODY_KINEMATIC):
+        body.f = cpv(0.0, 0.0)
+        body.t = 0.0
+    SoftSetTransform(body)
 
 
 # -- threads within one step ---------------------------------------------------------
@@ -3902,14 +3921,17 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
                     SoftJointsSolve(&ctx, 0)
                     SoftRelax(&ctx, r == SOFT_RELAX_ITERATIONS - 1)
                 SoftProfileMark(SOFT_STAGE_RELAX)
-        if tamias_load(&ctx.elastic):
+        if ctx.groupCount > 0 and SoftGroupsFinish(&ctx):
+            pass    # (each group finished its own: SoftSubstepGroup)
+        elif tamias_load(&ctx.elastic):
             SoftRun(&ctx, SOFT_TASK_UNPACK, 0, ctx.colorLanes[SOFT_GRAPH_COLORS], 0)
             SoftApplyRestitution(&ctx)
             SoftRun(&ctx, SOFT_TASK_STORE, 0, ctx.contactCount, 0)
+            SoftRun(&ctx, SOFT_TASK_FINISH_BODIES, 1, ctx.bodyCount, 0)
         else:
             SoftRun(&ctx, SOFT_TASK_UNPACK, 0, ctx.colorLanes[SOFT_GRAPH_COLORS], 1)
             SoftStoreOverflow(&ctx)
-        SoftRun(&ctx, SOFT_TASK_FINISH_BODIES, 1, ctx.bodyCount, 0)
+            SoftRun(&ctx, SOFT_TASK_FINISH_BODIES, 1, ctx.bodyCount, 0)
         SoftFinishJoints(&ctx)
     if ctx.threaded:
         SoftPoolRelease()
