@@ -259,6 +259,8 @@ cdef struct SoftContext:
     int *groupPairEnd         # ... and its colorPairEnd: groupPairEnd[g * SOFT_GRAPH_COLORS:]
     int *groupBodies          # the body slots, group by group, then those of no group
     int *groupBodyStart       # group g's: groupBodies[groupBodyStart[g]:groupBodyStart[g + 1]] (g <= groupCount)
+    int *groupContacts        # the contacts, group by group (arbiter order within each)
+    int *groupContactStart    # group g's: groupContacts[groupContactStart[g]:groupContactStart[g + 1]]
     int *overflow             # SoftContact indices solved one by one
     volatile long shapesUpdated   # by SoftUpdateShapes
     int *contactSlots         # each contact's lane slot (lane * SOFT_LANES + k; -1: the overflow)
@@ -2111,8 +2113,8 @@ cdef int *SoftReserveGroups(SoftContext *ctx) noexcept nogil:
     cdef int most = SoftMostGroups(ctx)
     cdef int i
     cdef int *parent = <int *>_reserve(ctx.space, SOFT_SCRATCH_GROUPS,
-                                       3 * bodies + n + (most + 2) + most * (4 * SOFT_GRAPH_COLORS + 1),
-                                       sizeof(int))
+                                       3 * bodies + 2 * n + 2 * (most + 2)
+                                       + most * (4 * SOFT_GRAPH_COLORS + 1), sizeof(int))
     if parent != NULL:
         for i in range(bodies):
             parent[i] = i
@@ -2184,6 +2186,8 @@ cdef bint SoftColorGroups(SoftContext *ctx, int *color, int groups) noexcept nog
     cdef int *lanesOf = bodyStart + (groups + 2)
     cdef int *pairEnd = lanesOf + groups * (SOFT_GRAPH_COLORS + 1)
     cdef int *next = pairEnd + groups * SOFT_GRAPH_COLORS    # [group][kind][colour]
+    cdef int *contactList = next + groups * 2 * SOFT_GRAPH_COLORS
+    cdef int *contactStart = contactList + n
     cdef int i, g, c, kind, idx, total, count, lanes, slot
     memset(next, 0, <size_t>groups * 2 * SOFT_GRAPH_COLORS * sizeof(int))
     for i in range(n):
@@ -2220,6 +2224,21 @@ cdef bint SoftColorGroups(SoftContext *ctx, int *color, int groups) noexcept nog
         color[i] = next[idx]
         next[idx] += 1
     ctx.contactSlots = color
+    # The contacts by group (counting sort, in arbiter order within each),
+    # for each group to prepare its own into its lanes (SoftSubstepGroup).
+    for g in range(groups + 1):
+        contactStart[g] = 0
+    for i in range(n):
+        contactStart[contactGroup[i] // 2 + 1] += 1
+    for g in range(groups):
+        contactStart[g + 1] += contactStart[g]
+    for i in range(n):
+        g = contactGroup[i] // 2
+        contactList[contactStart[g]] = i
+        contactStart[g] += 1
+    for g in range(groups, 0, -1):
+        contactStart[g] = contactStart[g - 1]
+    contactStart[0] = 0
     # The bodies by group (counting sort, in slot order within each); the
     # last list, `groups`, holds the bodies in no contact.
     for g in range(groups + 2):
@@ -2243,6 +2262,8 @@ cdef bint SoftColorGroups(SoftContext *ctx, int *color, int groups) noexcept nog
     ctx.groupPairEnd = pairEnd
     ctx.groupBodies = bodyList
     ctx.groupBodyStart = bodyStart
+    ctx.groupContacts = contactList
+    ctx.groupContactStart = contactStart
     return 1
 
 cdef inline bint SoftGroupsFinish(SoftContext *ctx) noexcept nogil:
@@ -2267,6 +2288,12 @@ cdef void SoftSubstepGroup(SoftContext *ctx, int g, bint marks) noexcept nogil:
     if contacts:
         lanes = &ctx.groupLanes[g * (SOFT_GRAPH_COLORS + 1)]
         pairEnd = &ctx.groupPairEnd[g * SOFT_GRAPH_COLORS]
+        # Its contacts prepared into its lanes here, not with all the
+        # others' (SoftPrepareLanes): the first pass finds them in cache.
+        SoftPackContacts(ctx, ctx.groupContacts, ctx.groupContactStart[g],
+                         ctx.groupContactStart[g + 1])
+        if marks:
+            SoftProfileMark(SOFT_STAGE_PREPARE)
     for k in range(ctx.substeps):
         for i in range(first, end):
             SoftIntegrateVelocity(ctx, ctx.groupBodies[i], k == ctx.substeps - 1)
@@ -2334,7 +2361,9 @@ cdef void SoftPrepareLanes(SoftContext *ctx) noexcept nogil:
     cdef SoftContact *sc
     # (The two bias rates SoftPrepareContact gives, by the lanes' sides.)
     SoftLaneBiasRatesFill(&ctx.laneBiasRates, ctx.contactSoft.biasRate, ctx.staticSoft.biasRate)
-    SoftRun(ctx, SOFT_TASK_PACK, 0, ctx.contactCount, 0)
+    if ctx.groupCount == 0:
+        SoftRun(ctx, SOFT_TASK_PACK, 0, ctx.contactCount, 0)
+    # (Else each group prepares its own before its substeps: SoftSubstepGroup.)
     for i in range(ctx.overflowCount):
         sc = &ctx.contacts[ctx.overflow[i]]
         SoftPrepareContact(ctx, ctx.overflow[i], sc)
@@ -2351,15 +2380,22 @@ cdef inline void SoftFetchSlot(SoftContext *ctx, int i) noexcept nogil:
     tamias_prefetch(&ctx.states[i])
     tamias_prefetch(&ctx.motion[i].px)
 
+cdef inline int SoftNth(const int *order, int i) noexcept nogil:
+    return order[i] if order != NULL else i
+
 cdef void SoftPackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
-    # Contacts begin to end, in arbiter order, each prepared and written
-    # into its lane slot (contactSlots). The SoftContact goes through the
+    SoftPackContacts(ctx, NULL, begin, end)
+
+cdef void SoftPackContacts(SoftContext *ctx, const int *order, int begin, int end) noexcept nogil:
+    # Contacts begin to end (or order[begin:end], a group's, where order is
+    # not NULL), in arbiter order, each prepared and written into its lane
+    # slot (contactSlots). The SoftContact goes through the
     # stack unless restitution reads it after the substeps: written to
     # ctx.contacts and read back, it was most of the memory the preparation
     # moved. In arbiter order the arbiters, their contacts and bodies are
     # read in the order they lie in memory, and the lanes being filled are
     # few (about two per colour), so they stay in cache until full.
-    cdef int i, slot, k
+    cdef int i, n, slot, k
     cdef cpArbiter *arb
     cdef cpArray *arbiters = ctx.space.arbiters
     cdef SoftContact local
@@ -2369,34 +2405,36 @@ cdef void SoftPackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
         if ctx.fetchAhead and i + SOFT_ARBITER_PREFETCH < end:
             # (Up to its state: the handlers and stamps after it are not
             # read.)
-            arb = <cpArbiter *>arbiters.arr[ctx.contactSource[i + SOFT_ARBITER_PREFETCH]]
+            arb = <cpArbiter *>arbiters.arr[ctx.contactSource[SoftNth(order, i + SOFT_ARBITER_PREFETCH)]]
             SoftFetchLines(arb, <char *>&arb.state - <char *>arb + sizeof(arb.state))
         if ctx.fetchAhead and i + SOFT_ARBITER_PREFETCH // 2 < end:
             # Its contacts, now that the arbiter itself has been fetched,
             # and its bodies' slots in the arrays of the step's bodies.
-            arb = <cpArbiter *>arbiters.arr[ctx.contactSource[i + SOFT_ARBITER_PREFETCH // 2]]
+            n = SoftNth(order, i + SOFT_ARBITER_PREFETCH // 2)
+            arb = <cpArbiter *>arbiters.arr[ctx.contactSource[n]]
             SoftFetchLines(arb.contacts, arb.count * sizeof(cpContact))
-            SoftFetchSlot(ctx, ctx.colorKeys[i + SOFT_ARBITER_PREFETCH // 2].ia)
-            SoftFetchSlot(ctx, ctx.colorKeys[i + SOFT_ARBITER_PREFETCH // 2].ib)
+            SoftFetchSlot(ctx, ctx.colorKeys[n].ia)
+            SoftFetchSlot(ctx, ctx.colorKeys[n].ib)
         if ctx.fetchAhead and i + SOFT_ARBITER_PREFETCH < end:
             # A lane about to take its first contact: all of its lines (a
             # lane is filled over a stretch of contacts, but each contact
             # writes to every line of it), for writing.
-            slot = ctx.contactSlots[i + SOFT_ARBITER_PREFETCH]
+            slot = ctx.contactSlots[SoftNth(order, i + SOFT_ARBITER_PREFETCH)]
             if slot >= 0 and slot % SOFT_LANES == 0:
                 for k in range(0, sizeof(SoftLanes), 64):
                     tamias_prefetch_write(<char *>&ctx.lanes[slot // SOFT_LANES] + k)
                 tamias_prefetch_write(&ctx.laneLinks[slot // SOFT_LANES])
-        slot = ctx.contactSlots[i]
+        n = SoftNth(order, i)
+        slot = ctx.contactSlots[n]
         if slot < 0:
             continue
-        sc = &ctx.contacts[i] if keep else &local
-        SoftPrepareContact(ctx, i, sc)
+        sc = &ctx.contacts[n] if keep else &local
+        SoftPrepareContact(ctx, n, sc)
         if slot % SOFT_LANES == 0:
             # (Slot 0 of a lane is never empty: its contact says the kind.)
-            ctx.lanes[slot // SOFT_LANES].points = ctx.colorKeys[i].kind + 1
+            ctx.lanes[slot // SOFT_LANES].points = ctx.colorKeys[n].kind + 1
         SoftPackLane(ctx, &ctx.lanes[slot // SOFT_LANES], &ctx.laneLinks[slot // SOFT_LANES],
-                     slot % SOFT_LANES, i, sc)
+                     slot % SOFT_LANES, n, sc)
 
 cdef void SoftPackLane(SoftContext *ctx, SoftLanes *ln, SoftLaneLinks *links, int k,
                        int i, const SoftContact *sc) noexcept nogil:
