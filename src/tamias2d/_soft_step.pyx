@@ -2084,13 +2084,14 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
 # the other instead of all in step, with the same operations on each
 # contact and body in the same order, so the same bits. A scene of many
 # separate piles whose lanes do not fit in a core's cache (Box2D's
-# many_pyramids: 15 MB) then reads each group's lanes from memory once a
-# step and from the cache in its other 15 passes, where all in step every
-# pass streamed them all. On two threads each takes whole groups, with no
-# wait between the passes. Only where nothing else runs between the
-# passes: no joints, no contact solved outside the colours, no Python
-# velocity or position function, no kinematic body in a contact (it moves
-# in every substep and may touch several piles).
+# many_pyramids: 15 MB) then has each group prepare its lanes, run its 16
+# passes over them and store their impulses while they stay in the cache,
+# where all in step every pass streamed all the lanes. On two threads each
+# takes whole groups, with no wait between the passes. Only where nothing
+# else runs between the passes: no joints, no contact solved outside the
+# colours or in a mass-ratio block, no Python velocity or position
+# function, no kinematic body in a contact (it moves in every substep and
+# may touch several piles).
 
 cdef bint SoftMayGroup(SoftContext *ctx) noexcept nogil:
     # (The colouring finds the rest: no kinematic body in a contact, and
@@ -2272,6 +2273,16 @@ cdef inline bint SoftGroupsFinish(SoftContext *ctx) noexcept nogil:
     # substeps, reads them all).
     return tamias_load(&ctx.elastic) == 0
 
+cdef inline void SoftGroupPass(SoftContext *ctx, const int *lanes, const int *ends,
+                               bint useBias, bint accumulate, bint trackMax) noexcept nogil:
+    # A biased or relax pass over a group's colours, colour c's lanes from
+    # lanes[c] to ends[c] (SoftSolve's and SoftRelax's SoftLanesSolve).
+    cdef int c
+    for c in range(SOFT_GRAPH_COLORS):
+        SoftLanesSolve(&ctx.lanes[lanes[c]], &ctx.laneLinks[lanes[c]], ends[c] - lanes[c], ctx.states,
+                       &ctx.laneBiasRates, ctx.inv_h, ctx.pushOut, useBias, accumulate, trackMax,
+                       ctx.fetchAhead)
+
 cdef void SoftSubstepGroup(SoftContext *ctx, int g, bint marks) noexcept nogil:
     # Group g's substeps: cpSoftStep's loop without joints over the group's
     # bodies and lanes, each pass as SoftWarmStart, SoftSolve and SoftRelax
@@ -2305,10 +2316,7 @@ cdef void SoftSubstepGroup(SoftContext *ctx, int g, bint marks) noexcept nogil:
                                    ctx.fetchAhead)
             if marks:
                 SoftProfileMark(SOFT_STAGE_WARM_START)
-            for c in range(SOFT_GRAPH_COLORS):
-                SoftLanesSolve(&ctx.lanes[lanes[c]], &ctx.laneLinks[lanes[c]], lanes[c + 1] - lanes[c],
-                               ctx.states, &ctx.laneBiasRates, ctx.inv_h, ctx.pushOut, 1, 0, trackMax,
-                               ctx.fetchAhead)
+            SoftGroupPass(ctx, lanes, lanes + 1, 1, 0, trackMax)
             if marks:
                 SoftProfileMark(SOFT_STAGE_SOLVE)
         for i in range(first, end):
@@ -2317,14 +2325,8 @@ cdef void SoftSubstepGroup(SoftContext *ctx, int g, bint marks) noexcept nogil:
             SoftProfileMark(SOFT_STAGE_INTEGRATE)
         if contacts:
             for r in range(SOFT_RELAX_ITERATIONS - 1):
-                for c in range(SOFT_GRAPH_COLORS):
-                    SoftLanesSolve(&ctx.lanes[lanes[c]], &ctx.laneLinks[lanes[c]], pairEnd[c] - lanes[c],
-                                   ctx.states, &ctx.laneBiasRates, ctx.inv_h, ctx.pushOut, 0, 0,
-                                   trackMax, ctx.fetchAhead)
-            for c in range(SOFT_GRAPH_COLORS):
-                SoftLanesSolve(&ctx.lanes[lanes[c]], &ctx.laneLinks[lanes[c]], lanes[c + 1] - lanes[c],
-                               ctx.states, &ctx.laneBiasRates, ctx.inv_h, ctx.pushOut, 0, 1, trackMax,
-                               ctx.fetchAhead)
+                SoftGroupPass(ctx, lanes, pairEnd, 0, 0, trackMax)
+            SoftGroupPass(ctx, lanes, lanes + 1, 0, 1, trackMax)
             if marks:
                 SoftProfileMark(SOFT_STAGE_RELAX)
     if SoftGroupsFinish(ctx):
@@ -4061,6 +4063,12 @@ def _mass_ratio_blocks(on=None):
         _use_blocks = bool(on)
     return bool(_use_blocks)
 
+def _count_at_least_zero(count):
+    # (The test switches' counts.)
+    if count < 0:
+        raise ValueError("count must be >= 0")
+    return count
+
 def _fetch_min_contacts_set(count=None):
     """The fewest arbiters (last step's) with which the soft step's passes
     fetch the records they will read a few items ahead (and, given `count`,
@@ -4068,23 +4076,19 @@ def _fetch_min_contacts_set(count=None):
     global _fetch_min_contacts
     before = _fetch_min_contacts
     if count is not None:
-        if count < 0:
-            raise ValueError("count must be >= 0")
-        _fetch_min_contacts = count
+        _fetch_min_contacts = _count_at_least_zero(count)
     return before
 
 def _group_contacts_set(count=None):
-    """About how many contacts make a group whose substeps run one after the
-    other's on one thread (SoftFindGroups; a step groups from twice that
-    many), and, given `count`, set it first: 0 never groups, a small number
-    groups small scenes (for tests, which check that grouping changes no
-    bits). Returns the value before."""
+    """About how many contacts make a group whose substeps run one group
+    after the other (SoftFindGroups; a step groups from twice that many),
+    and, given `count`, set it first: 0 never groups, a small number groups
+    small scenes (for tests, which check that grouping changes no bits).
+    Returns the value before."""
     global _group_contacts
     before = _group_contacts
     if count is not None:
-        if count < 0:
-            raise ValueError("count must be >= 0")
-        _group_contacts = count
+        _group_contacts = _count_at_least_zero(count)
     return before
 
 def _grouped_steps_count():
@@ -4099,9 +4103,7 @@ def _threaded_min_contacts_set(count=None):
     global _threaded_min_contacts
     before = _threaded_min_contacts
     if count is not None:
-        if count < 0:
-            raise ValueError("count must be >= 0")
-        _threaded_min_contacts = count
+        _threaded_min_contacts = _count_at_least_zero(count)
     return before
 
 def _link_sleeping_components(on=None):
