@@ -2114,7 +2114,7 @@ cdef int *SoftReserveGroups(SoftContext *ctx) noexcept nogil:
     cdef int most = SoftMostGroups(ctx)
     cdef int i
     cdef int *parent = <int *>_reserve(ctx.space, SOFT_SCRATCH_GROUPS,
-                                       3 * bodies + 2 * n + 2 * (most + 2)
+                                       4 * bodies + 2 * n + 2 * (most + 2)
                                        + most * (4 * SOFT_GRAPH_COLORS + 1), sizeof(int))
     if parent != NULL:
         for i in range(bodies):
@@ -2172,6 +2172,26 @@ cdef int SoftFindGroups(SoftContext *ctx, int *parent) noexcept nogil:
         contactGroup[i] = rootGroup[r] * 2 + key.kind
     return current + 1
 
+cdef void SoftSortByKey(const int *key, int shift, int first, int n, int buckets, int *start,
+                        int *order) noexcept nogil:
+    # Items first to n - 1 listed in order[] by their bucket, key[i] >> shift
+    # (0 to buckets - 1), each bucket's in item order (a counting sort):
+    # bucket b is order[start[b]:start[b + 1]].
+    cdef int i, b
+    for b in range(buckets + 1):
+        start[b] = 0
+    for i in range(first, n):
+        start[(key[i] >> shift) + 1] += 1
+    for b in range(buckets):
+        start[b + 1] += start[b]
+    for i in range(first, n):
+        b = key[i] >> shift
+        order[start[b]] = i
+        start[b] += 1
+    for b in range(buckets, 0, -1):
+        start[b] = start[b - 1]
+    start[0] = 0
+
 cdef bint SoftColorGroups(SoftContext *ctx, int *color, int groups) noexcept nogil:
     # SoftColorContacts' lanes laid out group by group (each group's
     # colours, two-point lanes first), and its lane slots given in arbiter
@@ -2189,6 +2209,7 @@ cdef bint SoftColorGroups(SoftContext *ctx, int *color, int groups) noexcept nog
     cdef int *next = pairEnd + groups * SOFT_GRAPH_COLORS    # [group][kind][colour]
     cdef int *contactList = next + groups * 2 * SOFT_GRAPH_COLORS
     cdef int *contactStart = contactList + n
+    cdef int *bodyGroup = contactStart + (groups + 1)
     cdef int i, g, c, kind, idx, total, count, lanes, slot
     memset(next, 0, <size_t>groups * 2 * SOFT_GRAPH_COLORS * sizeof(int))
     for i in range(n):
@@ -2225,39 +2246,14 @@ cdef bint SoftColorGroups(SoftContext *ctx, int *color, int groups) noexcept nog
         color[i] = next[idx]
         next[idx] += 1
     ctx.contactSlots = color
-    # The contacts by group (counting sort, in arbiter order within each),
-    # for each group to prepare its own into its lanes (SoftSubstepGroup).
-    for g in range(groups + 1):
-        contactStart[g] = 0
-    for i in range(n):
-        contactStart[contactGroup[i] // 2 + 1] += 1
-    for g in range(groups):
-        contactStart[g + 1] += contactStart[g]
-    for i in range(n):
-        g = contactGroup[i] // 2
-        contactList[contactStart[g]] = i
-        contactStart[g] += 1
-    for g in range(groups, 0, -1):
-        contactStart[g] = contactStart[g - 1]
-    contactStart[0] = 0
-    # The bodies by group (counting sort, in slot order within each); the
-    # last list, `groups`, holds the bodies in no contact.
-    for g in range(groups + 2):
-        bodyStart[g] = 0
+    # The contacts by group, for each group to prepare its own into its
+    # lanes (SoftSubstepGroup); the bodies by group, the last list
+    # (`groups`) the bodies in no contact.
+    SoftSortByKey(contactGroup, 1, 0, n, groups, contactStart, contactList)
     for i in range(1, bodies):
         g = rootGroup[SoftGroupRoot(parent, i)]
-        bodyStart[(g if g >= 0 else groups) + 1] += 1
-    for g in range(groups + 1):
-        bodyStart[g + 1] += bodyStart[g]
-    for i in range(1, bodies):
-        g = rootGroup[SoftGroupRoot(parent, i)]
-        if g < 0:
-            g = groups
-        bodyList[bodyStart[g]] = i
-        bodyStart[g] += 1
-    for g in range(groups, 0, -1):
-        bodyStart[g] = bodyStart[g - 1]
-    bodyStart[0] = 0
+        bodyGroup[i] = g if g >= 0 else groups
+    SoftSortByKey(bodyGroup, 0, 1, bodies, groups + 1, bodyStart, bodyList)
     ctx.groupCount = groups
     ctx.groupLanes = lanesOf
     ctx.groupPairEnd = pairEnd
@@ -2335,10 +2331,7 @@ cdef void SoftSubstepGroup(SoftContext *ctx, int g, bint marks) noexcept nogil:
         # finish, group by group: each writes its own contacts and bodies).
         if contacts:
             SoftUnpackLanes(ctx, lanes[0], lanes[SOFT_GRAPH_COLORS], 1)
-        for i in range(first, end):
-            if ctx.fetchAhead and i + SOFT_BODY_PREFETCH < end:
-                SoftFetchLines(ctx.bodies[ctx.groupBodies[i + SOFT_BODY_PREFETCH]].body, sizeof(cpBody))
-            SoftFinishBody(ctx, ctx.groupBodies[i])
+        SoftFinishBodies(ctx, ctx.groupBodies, first, end)
         if marks:
             SoftProfileMark(SOFT_STAGE_FINISH)
 
@@ -2383,6 +2376,7 @@ cdef inline void SoftFetchSlot(SoftContext *ctx, int i) noexcept nogil:
     tamias_prefetch(&ctx.motion[i].px)
 
 cdef inline int SoftNth(const int *order, int i) noexcept nogil:
+    # Item i of a pass over a list (a group's), or i itself without one.
     return order[i] if order != NULL else i
 
 cdef void SoftPackLanes(SoftContext *ctx, int begin, int end) noexcept nogil:
@@ -3553,12 +3547,14 @@ cdef inline void SoftIntegratePosition(SoftContext *ctx, int i) noexcept nogil:
         # The joints' preStep reads the transform.
         SoftSetTransform(body)
 
-cdef void SoftFinishBodies(SoftContext *ctx, int begin, int end) noexcept nogil:
+cdef void SoftFinishBodies(SoftContext *ctx, const int *order, int begin, int end) noexcept nogil:
+    # Bodies begin to end (or order[begin:end], a group's, where order is
+    # not NULL) written back.
     cdef int i
     for i in range(begin, end):
         if ctx.fetchAhead and i + SOFT_BODY_PREFETCH < end:
-            SoftFetchLines(ctx.bodies[i + SOFT_BODY_PREFETCH].body, sizeof(cpBody))
-        SoftFinishBody(ctx, i)
+            SoftFetchLines(ctx.bodies[SoftNth(order, i + SOFT_BODY_PREFETCH)].body, sizeof(cpBody))
+        SoftFinishBody(ctx, SoftNth(order, i))
 
 cdef inline void SoftFinishBody(SoftContext *ctx, int i) noexcept nogil:
     cdef SoftBody *sb = &ctx.bodies[i]
@@ -3660,7 +3656,7 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
     elif task == SOFT_TASK_STORE:
         SoftStoreImpulses(ctx, begin, end)
     elif task == SOFT_TASK_FINISH_BODIES:
-        SoftFinishBodies(ctx, begin, end)
+        SoftFinishBodies(ctx, NULL, begin, end)
     elif task == SOFT_TASK_PACK:
         SoftPackLanes(ctx, begin, end)
     elif task == SOFT_TASK_UPDATE_SHAPES:
