@@ -13,9 +13,9 @@ scenes are in docs/benchmarks.md.
         [--scenes large_pyramid ...] [--sleep 0.5]
 
 Scenes: large_pyramid (built here as Box2D's benchmark builds it),
-many_pyramids and tumbler (built by benchmarks/against_box2d.py), a 20-row
-pyramid, and tests/scenes.py's rain and drum. The default runs all of
-them; many_pyramids (22,000 boxes) takes about a minute.
+many_pyramids, tumbler and rain_1000 (built by benchmarks/against_box2d.py),
+a 20-row pyramid, and tests/scenes.py's rain and drum. The default runs all
+of them; many_pyramids (22,000 boxes) takes about a minute.
 
 --sleep sets every scene's sleep_time_threshold (off by default, as in
 benchmarks/against_box2d.py), for the cost of sleeping while a pile is
@@ -72,6 +72,7 @@ SCENES = {
     "many_pyramids": box2d_scene("many_pyramids"),
     "tumbler": box2d_scene("tumbler"),
     "pyramid_20": lambda: large_pyramid(20),
+    "rain_1000": box2d_scene("rain_1000"),
     "rain": lambda: scenes.rain(tamias2d),
     "drum": lambda: scenes.drum(tamias2d),
 }

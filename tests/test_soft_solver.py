@@ -1857,6 +1857,104 @@ def test_kept_broad_phase_walks_change_nothing(scene):
         assert repr(k) == repr(w), f"body {i}: {k} != {w}"
 
 
+def _disturbed_pile():
+    # A resting pile whose shapes are moved from outside between steps: a
+    # box nudged within its leaf's box, one lifted out of it, a shape
+    # reindexed by hand, a box taken out and put back, a kinematic board
+    # pushed into a corner of the pile, a box turned kinematic.
+    s = tamias2d.Space()
+    s.gravity = 0, -900
+    ground = tamias2d.Segment(s.static_body, (-400, 0), (400, 0), 2)
+    ground.friction = 0.8
+    s.add(ground)
+    bodies, shapes = [], []
+    for i in range(20):
+        b = tamias2d.Body(1, tamias2d.moment_for_box(1, (20, 20)))
+        b.position = -100 + 21 * (i % 5), 11 + (i // 5) * 21
+        box = tamias2d.Poly.create_box(b, (20, 20))
+        box.friction = 0.8
+        s.add(b, box)
+        bodies.append(b)
+        shapes.append(box)
+    board = tamias2d.Body(body_type=tamias2d.Body.KINEMATIC)
+    board.position = -180, 30
+    plank = tamias2d.Poly.create_box(board, (60, 10))
+    s.add(board, plank)
+
+    def hook(i):
+        if i == 70:
+            bodies[17].position += (0.01, 0)
+        if i == 90:
+            bodies[19].position += (80, 60)
+        if i == 110:
+            bodies[12].position += (0.5, 0)
+            s.reindex_shape(shapes[12])
+        if i == 130:
+            s.remove(bodies[18], shapes[18])
+        if i == 150:
+            s.add(bodies[18], shapes[18])
+        if i == 170:
+            board.velocity = 100, 0
+        if i == 200:
+            board.velocity = 0, 0
+            bodies[0].body_type = tamias2d.Body.KINEMATIC
+    s.scene_hook = hook
+    return s
+
+
+_SWITCH_SCENES["disturbed_pile"] = _disturbed_pile
+_SWITCH_SCENES["kinematic_floor"] = lambda: _separate_piles(kinematic_floor=True)
+
+
+@pytest.mark.parametrize("scene", ["pyramid", "disturbed_pile", "kinematic_floor", "add_remove",
+                                   "type_changes", "sleepy_pile", "static_changes"])
+def test_skipped_leaf_refreshes_change_nothing(scene):
+    # Each dynamic shape keeps a copy of its leaf's box in the tree; where
+    # the shapes' update finds every new box inside its copy, the tree's
+    # refresh of its leaves (which would move none) is skipped. Shapes
+    # moved, reindexed, added and removed, kinematic ones and sleep must
+    # keep the copies right: the same bits as refreshing every step.
+    from tamias2d import _soft_step
+    build = _switch_scene(scene)
+    assert _soft_step._skip_leaf_refresh()
+    try:
+        _soft_step._skip_leaf_refresh(False)
+        skipped = _soft_step._skipped_refreshes_count()
+        refreshed = _state_after(build, 240)
+        assert _soft_step._skipped_refreshes_count() == skipped
+    finally:
+        _soft_step._skip_leaf_refresh(True)
+    with_skips = _state_after(build, 240)
+    assert _soft_step._skipped_refreshes_count() > skipped, "no refresh was skipped: nothing was tested"
+    assert len(with_skips) == len(refreshed)
+    for i, (k, r) in enumerate(zip(with_skips, refreshed)):
+        assert repr(k) == repr(r), f"body {i}: {k} != {r}"
+
+
+@pytest.mark.parametrize("how", ["copy", "pickle"])
+def test_a_copy_at_rest_refreshes_its_leaves_when_one_leaves_its_box(how):
+    # A copy's tree is rebuilt from the snapshot, not through its leaves'
+    # boxes being set: the shapes' copies are renewed on its first step.
+    # A box lifted out of its leaf's box after the copy must then be moved
+    # in the copy's tree as in the original's.
+    import pickle
+    s = _disturbed_pile()
+    del s.scene_hook
+    s.solver = "soft"
+    for _ in range(60):
+        s.step(DT)
+    c = s.copy() if how == "copy" else pickle.loads(pickle.dumps(s))
+    for space in (s, c):
+        lifted = sorted(space.bodies, key=lambda b: (b.position.y, b.position.x))[-1]
+        lifted.position += (0, 80)
+        for _ in range(90):
+            space.step(DT)
+    assert len(s.bodies) == len(c.bodies)
+    for a, b in zip(s.bodies, c.bodies):
+        assert (tuple(a.position), a.angle, tuple(a.velocity)) == \
+            (tuple(b.position), b.angle, tuple(b.velocity))
+
+
 @pytest.mark.parametrize("solver", ["soft", "chipmunk"])
 @pytest.mark.parametrize("scene", ["pyramid", "add_remove", "type_changes", "sleepy_pile",
                                    "static_changes", "rain_persistence_1"])

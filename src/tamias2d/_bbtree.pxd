@@ -22,6 +22,10 @@ ctypedef cpVect (*cpBBTreeVelocityFunc)(void *obj) noexcept nogil
 # Not Munk2D's: fetches into cache what the tree's box function will read
 # of an object beyond the object itself (cpBBTreeSetFetchFunc).
 ctypedef void (*cpBBTreeFetchFunc)(void *obj) noexcept nogil
+# Not Munk2D's: told each leaf's box whenever the tree sets it (a new leaf,
+# or one refattened as it left its box), so that the object can keep a copy
+# (cpBBTreeSetFatFunc).
+ctypedef void (*cpBBTreeFatFunc)(void *obj, cpBB fat) noexcept nogil
 
 cdef struct Node
 cdef struct Pair
@@ -48,6 +52,11 @@ cdef struct cpBBTree:
     Node **refreshList
     int refreshCap
     cpBBTreeFetchFunc fetchFunc
+    # Not Munk2D's: the fat-box function, and whether every leaf's box has
+    # been told to it since (0 after a snapshot's tree is linked:
+    # cpBBTreeSyncFat tells them all).
+    cpBBTreeFatFunc fatFunc
+    bint fatSynced
 
 cdef struct NodeChildren:
     Node *a
@@ -115,13 +124,16 @@ cdef cpSpatialIndex *cpBBTreeNew(cpSpatialIndexBBFunc bbfunc, cpSpatialIndex *st
 cdef void cpBBTreeOptimize(cpSpatialIndex *index) noexcept nogil
 cdef void cpBBTreeSetVelocityFunc(cpSpatialIndex *index, cpBBTreeVelocityFunc func) noexcept nogil
 cdef void cpBBTreeSetFetchFunc(cpSpatialIndex *index, cpBBTreeFetchFunc func) noexcept nogil
+cdef void cpBBTreeSetFatFunc(cpSpatialIndex *index, cpBBTreeFatFunc func) noexcept nogil
+cdef bint cpBBTreeSyncFat(cpSpatialIndex *index) noexcept nogil
 # The soft solver's broad phase: cpBBTreeReindexQuery's pairs written into
 # `collector` with where each pair's id lives, or nothing when the tree is
 # still at the version in `known` (then the caller's record of the last walk
 # holds); false (nothing done) unless the index and its static index are
-# trees.
+# trees. `inside`: the caller has checked that no leaf left its box (through
+# the fat-box function's copies), so the leaves' refresh is skipped.
 cdef bint cpBBTreeReindexCollect(cpSpatialIndex *index, cpPairCollector *collector,
-                                 unsigned long long *known) noexcept nogil
+                                 unsigned long long *known, bint inside) noexcept nogil
 # Sets how far around each dynamic leaf's box the static tree is searched
 # (kept in the dynamic tree). Made larger, every leaf looks for its pairs
 # afresh in the next walk, so the cached pairs are those of the new reach.

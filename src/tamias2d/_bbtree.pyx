@@ -620,6 +620,8 @@ cdef Node *LeafNew(cpBBTree *tree, void *obj) noexcept nogil:
         return NULL
     node.obj = obj
     node.bb = GetBB(tree, obj)
+    if tree.fatFunc != NULL:
+        tree.fatFunc(obj, node.bb)
     node.parent = NULL
     node.node.leaf.stamp = 0
     node.node.leaf.pairs = NULL
@@ -633,6 +635,8 @@ cdef bint LeafUpdate(Node *leaf, cpBBTree *tree) noexcept nogil:
         # Left its fat box: refatten and reinsert. The removal frees the one
         # internal node the insertion takes, so this cannot run out of memory.
         leaf.bb = GetBB(tree, leaf.obj)
+        if tree.fatFunc != NULL:
+            tree.fatFunc(leaf.obj, leaf.bb)
         TreeChanged(tree)
         root = SubtreeRemove(root, leaf, tree)
         tree.root = SubtreeInsert(root, leaf, tree)
@@ -690,6 +694,8 @@ cdef cpSpatialIndex *cpBBTreeInit(cpBBTree *tree, cpSpatialIndexBBFunc bbfunc,
     if cpSpatialIndexInit(<cpSpatialIndex *>tree, &klass, bbfunc, staticIndex) == NULL:
         return NULL
     tree.velocityFunc = NULL
+    tree.fatFunc = NULL
+    tree.fatSynced = 0
     tree.staticReach = 0.0
     tree.leaves = cpHashSetNew(0, leafSetEql)
     tree.root = NULL
@@ -719,6 +725,31 @@ cdef void cpBBTreeSetFetchFunc(cpSpatialIndex *index, cpBBTreeFetchFunc func) no
     if index.klass != &klass:
         return
     (<cpBBTree *>index).fetchFunc = func
+
+
+cdef void cpBBTreeSetFatFunc(cpSpatialIndex *index, cpBBTreeFatFunc func) noexcept nogil:
+    cdef cpBBTree *tree = GetTree(index)
+    if tree != NULL:
+        tree.fatFunc = func
+        # (Leaves already there were not told their boxes.)
+        tree.fatSynced = cpHashSetCount(tree.leaves) == 0
+
+
+cdef void TellLeafFat(void *elt, void *data) noexcept nogil:
+    cdef Node *leaf = <Node *>elt
+    (<cpBBTree *>data).fatFunc(leaf.obj, leaf.bb)
+
+
+cdef bint cpBBTreeSyncFat(cpSpatialIndex *index) noexcept nogil:
+    # Every leaf's box told to the fat-box function, unless they all have
+    # been since it was set. False without a function.
+    cdef cpBBTree *tree = GetTree(index)
+    if tree == NULL or tree.fatFunc == NULL:
+        return 0
+    if not tree.fatSynced:
+        cpHashSetEach(tree.leaves, TellLeafFat, tree)
+        tree.fatSynced = 1
+    return 1
 
 
 cdef void RequeryLeaf(void *elt, void *data) noexcept nogil:
@@ -847,12 +878,14 @@ cdef void RefreshLeaves(cpBBTree *tree) noexcept nogil:
 
 
 cdef void ReindexQuery(cpBBTree *tree, cpSpatialIndexQueryFunc func, cpPairCollector *collector,
-                       void *data, unsigned long long *known) noexcept nogil:
+                       void *data, unsigned long long *known, bint inside) noexcept nogil:
     # Pairs go to func (the id it returns is kept) or, with a collector,
     # into it with where the id lives. Given `known`, a version of the tree
     # whose walk the caller has kept: the walk is skipped if the leaves'
     # refresh left the tree at that version (the same pairs, in the same
     # order, would be reported); otherwise set to the version after it.
+    # `inside`: the caller knows that every leaf is still inside its box, so
+    # the refresh would change nothing (cpBBTreeReindexCollect).
     cdef cpSpatialIndex *staticIndex
     cdef Node *staticRoot = NULL
     cdef MarkContext context
@@ -861,7 +894,8 @@ cdef void ReindexQuery(cpBBTree *tree, cpSpatialIndexQueryFunc func, cpPairColle
             known[0] = 0
         return
     # Leaves are refreshed in hash-set order; LeafUpdate may change the root.
-    RefreshLeaves(tree)
+    if not inside:
+        RefreshLeaves(tree)
     if known != NULL and known[0] != 0 and known[0] == tree.version:
         IncrementStamp(tree)
         return
@@ -883,11 +917,11 @@ cdef void ReindexQuery(cpBBTree *tree, cpSpatialIndexQueryFunc func, cpPairColle
 
 cdef void cpBBTreeReindexQuery(cpSpatialIndex *index, cpSpatialIndexQueryFunc func,
                                void *data) noexcept nogil:
-    ReindexQuery(<cpBBTree *>index, func, NULL, data, NULL)
+    ReindexQuery(<cpBBTree *>index, func, NULL, data, NULL, 0)
 
 
 cdef bint cpBBTreeReindexCollect(cpSpatialIndex *index, cpPairCollector *collector,
-                                 unsigned long long *known) noexcept nogil:
+                                 unsigned long long *known, bint inside) noexcept nogil:
     # cpBBTreeReindexQuery, but each pair is written into the collector with
     # a pointer to the id the tree keeps for it (NULL for a pair new this
     # step, whose id is not kept), so that the caller can run the narrow
@@ -901,7 +935,7 @@ cdef bint cpBBTreeReindexCollect(cpSpatialIndex *index, cpPairCollector *collect
     staticIndex = (<cpBBTree *>index).spatialIndex.staticIndex
     if staticIndex != NULL and staticIndex.klass != &klass:
         return 0
-    ReindexQuery(<cpBBTree *>index, NULL, collector, NULL, known)
+    ReindexQuery(<cpBBTree *>index, NULL, collector, NULL, known, inside)
     return 1
 
 

@@ -140,7 +140,7 @@ cdef struct ContactBuffer:
     cpContactBufferHeader header
     cpContact contacts[CONTACTS_PER_BUFFER]
 
-DEF FORMAT_VERSION = 4
+DEF FORMAT_VERSION = 5
 
 # Records. Only 8- and 4-byte fields, widest first, so there is no padding.
 
@@ -2940,6 +2940,8 @@ cdef void _link_tree(cpBBTree *tree, Parsed *p, int j, Node *block, Pair *pairs,
             node.node.children.a = &block[r.a - first]
             node.node.children.b = &block[r.bchild - first]
     tree.root = &block[p.index[j].root - first] if p.index[j].root >= 0 else NULL
+    # (Its leaves' boxes were not told to its fat-box function.)
+    tree.fatSynced = 0
     tree.stamp = p.index[j].stamp
     tree.staticReach = p.index[j].reach
     # Head insertion reverses: insert each bucket's chain backwards.

@@ -49,7 +49,7 @@ from cpython.pythread cimport (PyThread_type_lock, PyThread_allocate_lock,
 
 cdef extern from "pythread.h" nogil:
     unsigned long PyThread_start_new_thread(void (*func)(void *) noexcept nogil, void *arg)
-from tamias2d.vector cimport cpVect, cpv, cpTransformNewTranspose, cpfmin, cpfmax
+from tamias2d.vector cimport cpVect, cpv, cpTransformNewTranspose, cpfmin, cpfmax, cpBBContainsBB
 from tamias2d.body cimport cpBodyGetType, cpBodyIsSleeping, cpBodyUpdateVelocity, cpBodyUpdatePosition
 from tamias2d.constraints cimport tamias_constraint_scale_impulse
 from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, StageResetArbiters,
@@ -65,13 +65,14 @@ from tamias2d._spatialindex cimport (cpSpatialIndexEach, cpSpatialIndexReindexQu
     cpSpatialIndexCount)
 from tamias2d.shape cimport cpShapeCacheBB
 from tamias2d._bbtree cimport (cpBBTreeReindexCollect, cpPairCollector, cpCollectedPair, cpPairSlot, cpBBTreeGetStaticReach,
-    cpBBTreeSetStaticReach)
+    cpBBTreeSetStaticReach, cpBBTreeSyncFat)
 from tamias2d.collision cimport (cpCollideSoftInto, CollisionDiagnostics, cpCollisionTakeDiagnostics,
     cpCollisionPutDiagnostics)
 from tamias2d._config cimport (cpCollisionID, cpHashValue, CP_MAX_CONTACTS_PER_ARBITER,
     CP_HASH_PAIR, tamias_prefetch, tamias_prefetch_write, tamias_lowest_bit,
     CP_POLY_SHAPE_INLINE_ALLOC)
 from tamias2d._structs cimport (cpCollisionInfo, cpHashSet, cpSegmentShape, CP_SEGMENT_SHAPE,
+    cpSpatialIndexBBFunc,
     cpContactBufferHeader,
     cpPolyShape, cpSplittingPlane)
 from libc.string cimport memcpy
@@ -263,6 +264,8 @@ cdef struct SoftContext:
     int *groupContactStart    # group g's: groupContacts[groupContactStart[g]:groupContactStart[g + 1]]
     int *overflow             # SoftContact indices solved one by one
     volatile long shapesUpdated   # by SoftUpdateShapes
+    volatile long shapesEscaped   # nonzero: one of them left its leaf's box (counted with fatKnown)
+    bint fatKnown             # every dynamic shape's softFat is its leaf's box: shapesEscaped is counted
     int *contactSlots         # each contact's lane slot (lane * SOFT_LANES + k; -1: the overflow)
     SoftColorKey *colorKeys   # by SoftCountRange, for SoftColorContacts and the preparation
     int overflowCount
@@ -417,6 +420,10 @@ cdef bint _use_guesses = 1
 cdef bint _keep_pairs = 1
 # Steps whose walk was kept, in all spaces (for tests: that it happens).
 cdef volatile long _kept_walks = 0
+# Whether the leaves' refresh is skipped when no shape left its leaf's box
+# (off only in tests), and the steps so far (all spaces) that skipped it.
+cdef bint _skip_refresh = 1
+cdef volatile long _skipped_refreshes = 0
 # Contacts solved one by one so far, outside the colours (for tests).
 cdef volatile long _overflow_total = 0
 # The same for the bodies' arbiter lists (SoftResetArbiters).
@@ -645,10 +652,15 @@ cdef inline void SoftPrefetchArbiter(cpSpace *space, SoftCandidate *c) noexcept 
 
 cdef void SoftUpdateShapes(SoftContext *ctx, int begin, int end) noexcept nogil:
     # The shapes' boxes and world data, body by body (on the pool); counted,
-    # to check that they were all the dynamic index holds.
+    # to check that they were all the dynamic index holds. With fatKnown,
+    # also noted: whether a shape's box (as the tree makes it from the
+    # shape) left its leaf's, which the tree's refresh would then move.
+    # None did: the refresh, a pass over every leaf in the leaf set's
+    # order, is skipped.
     cdef cpArray *bodies = ctx.space.dynamicBodies
+    cdef cpSpatialIndexBBFunc treeBox = ctx.space.dynamicShapes.bbfunc
     cdef cpShape *shape
-    cdef long count = 0
+    cdef long count = 0, escaped = 0
     cdef int i
     for i in range(begin, end):
         # The bodies and their shapes are scattered in memory: the body's
@@ -664,12 +676,17 @@ cdef void SoftUpdateShapes(SoftContext *ctx, int begin, int end) noexcept nogil:
         shape = (<cpBody *>bodies.arr[i]).shapeList
         while shape != NULL:
             cpShapeCacheBB(shape)
+            # (One is enough to refresh them all.)
+            if ctx.fatKnown and escaped == 0 and not cpBBContainsBB(shape.softFat, treeBox(shape)):
+                escaped = 1
             # The slot SoftGatherRange will give the body, unless the
             # components stage wakes or puts to sleep a body (checked).
             shape.softSlot = i + 1
             count += 1
             shape = shape.next
     tamias_add(&ctx.shapesUpdated, count)
+    if escaped:
+        tamias_add(&ctx.shapesEscaped, escaped)
 
 cdef void SoftSetReach(cpSpace *space) noexcept nogil:
     # How far around a dynamic shape's box the static tree is searched, and
@@ -701,14 +718,27 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     cdef unsigned long long known, walked
     cdef cpPairCollector collector
     cdef int i, n, flags, stamped
+    cdef bint inside
     cpSpacePushFreshContactBuffer(space)
+    # (The reach first: the tree's boxes of kinematic and bullet shapes,
+    # which the shapes' update tests, take it in. It reads velocities only.)
+    SoftSetReach(space)
     # The awake bodies' shapes are the dynamic index's; should they not be
     # (the counts differ), the index's walk does it again, as the chipmunk
     # solver does (the boxes come out the same however often they are made).
+    # Each is tested against its leaf's box (its copy: cpBBTreeSyncFat makes
+    # sure the copies are current): where none left its box the tree's
+    # refresh of its leaves would change nothing, and is skipped.
+    ctx.fatKnown = _skip_refresh and cpBBTreeSyncFat(space.dynamicShapes)
     tamias_store(&ctx.shapesUpdated, 0)
+    tamias_store(&ctx.shapesEscaped, 0)
     SoftRun(ctx, SOFT_TASK_UPDATE_SHAPES, 0, space.dynamicBodies.num, 0)
+    inside = ctx.fatKnown and tamias_load(&ctx.shapesEscaped) == 0
     if tamias_load(&ctx.shapesUpdated) != cpSpatialIndexCount(space.dynamicShapes):
         cpSpatialIndexEach(space.dynamicShapes, cpShapeUpdateFunc, NULL)
+        inside = 0
+    if inside:
+        tamias_add(&_skipped_refreshes, 1)
     # (Room for one pair at least: the walk grows the array as soon as a
     # pair fills it.)
     collector.pairs = <SoftPair *>_reserve(space, SOFT_SCRATCH_PAIRS, 1, sizeof(SoftPair))
@@ -721,10 +751,9 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     # The last walk of the tree's pairs is kept: while no leaf leaves its
     # box and nothing is added or removed, the next steps take their pairs
     # from there.
-    SoftSetReach(space)
     known = space.softScratch.pairsVersion if _keep_pairs else 0
     walked = known
-    if not cpBBTreeReindexCollect(space.dynamicShapes, &collector, &walked):
+    if not cpBBTreeReindexCollect(space.dynamicShapes, &collector, &walked, inside):
         # A spatial hash: pair by pair, as the chipmunk solver.
         space.softScratch.pairsVersion = 0
         cpSpatialIndexReindexQuery(space.dynamicShapes, cpSpaceCollideShapes, space)
@@ -4039,6 +4068,19 @@ def _keep_broad_phase_pairs(on=None):
     if on is not None:
         _keep_pairs = bool(on)
     return bool(_keep_pairs)
+
+def _skip_leaf_refresh(on=None):
+    """Whether the broad phase skips the tree's refresh of its leaves when no
+    shape left its leaf's box (and, given `on`, set it first; for tests,
+    which check that refreshing every step changes nothing)."""
+    global _skip_refresh
+    if on is not None:
+        _skip_refresh = bool(on)
+    return bool(_skip_refresh)
+
+def _skipped_refreshes_count():
+    """Steps so far (all spaces) whose broad phase skipped the leaves' refresh."""
+    return tamias_load(&_skipped_refreshes)
 
 def _keep_arbiter_threads(on=None):
     """Whether a soft step leaves last step's arbiters threaded on their

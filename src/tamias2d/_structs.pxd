@@ -145,6 +145,11 @@ cdef struct cpShape:
     cpShape *next
     cpShape *prev
     cpHashValue hashid
+    # Not Munk2D's: the box of its leaf in the dynamic tree, kept by the tree
+    # (its fat-box function, _bbtree.pyx), against which the soft step tests
+    # the shape's new box so as to skip the leaves' refresh when none left
+    # its box (SoftUpdateShapes).
+    cpBB softFat
 
 cdef struct cpCircleShape:
     cpShape shape

@@ -53,7 +53,7 @@ from tamias2d._spatialindex cimport (cpSpatialIndexFree, cpSpatialIndexEach,
     cpSpatialIndexReindexObject, cpSpatialIndexReindexQuery, cpSpatialIndexQuery,
     cpSpatialIndexSegmentQuery)
 from tamias2d._bbtree cimport (cpBBTreeNew, cpBBTreeSetVelocityFunc, cpBBTreeVelocityFunc,
-    cpBBTreeSetFetchFunc,
+    cpBBTreeSetFetchFunc, cpBBTreeSetFatFunc,
     cpBBTreeClass, cpBBTreeGetStaticReach)
 from tamias2d._spacehash cimport cpSpaceHashNew
 from tamias2d.vector cimport (cpVect, cpBB, cpTransform, cpv, cpvadd, cpvsub, cpvmult,
@@ -158,6 +158,10 @@ cdef void _shapeFetchBody(void *obj) noexcept nogil:
     tamias_prefetch(&body.v)
     tamias_prefetch(&body.isBullet)
 
+cdef void _shapeSetFat(void *obj, cpBB fat) noexcept nogil:
+    # The box of the shape's leaf in the dynamic tree (cpShape.softFat).
+    (<cpShape *>obj).softFat = fat
+
 # The dynamic tree predicts a shape's motion from its body's velocity.
 cdef cpVect ShapeVelocityFunc(void *obj) noexcept nogil:
     return (<cpShape *>obj).body.v
@@ -195,6 +199,7 @@ cdef cpSpace *cpSpaceInit(cpSpace *space) noexcept nogil:
     if space.dynamicShapes != NULL:
         cpBBTreeSetVelocityFunc(space.dynamicShapes, ShapeVelocityFunc)
         cpBBTreeSetFetchFunc(space.dynamicShapes, _shapeFetchBody)
+        cpBBTreeSetFatFunc(space.dynamicShapes, _shapeSetFat)
 
     space.allocatedBuffers = cpArrayNew(0)
     space.dynamicBodies = cpArrayNew(0)
