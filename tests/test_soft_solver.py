@@ -1931,6 +1931,55 @@ def test_skipped_leaf_refreshes_change_nothing(scene):
         assert repr(k) == repr(r), f"body {i}: {k} != {r}"
 
 
+def _heavy_on_lights():
+    # Mass-ratio blocks: a heavy box on two light ones, resting.
+    s = _ratio_space()
+    _two_lights(s)
+    return s
+
+
+_SWITCH_SCENES["heavy_on_lights"] = _heavy_on_lights
+
+
+@pytest.mark.parametrize("scene", ["pyramid", "separate_piles", "disturbed_pile", "kinematic_floor",
+                                   "add_remove", "type_changes", "sleepy_pile", "static_changes",
+                                   "heavy_on_lights"])
+@pytest.mark.parametrize("threads", [1, 2])
+def test_taking_over_the_last_colouring_changes_nothing(scene, threads):
+    # A step whose contacts have the same colouring keys as the last step's
+    # (the same bodies in the same slots, lane kinds and blocks, in the
+    # same order) takes over its colouring: lane slots, overflow, lanes and
+    # contact groups. The same bits as colouring every step, grouped
+    # (groups of four contacts here) or not, on one thread or two.
+    from tamias2d import _soft_step
+    base = _switch_scene(scene)
+
+    def build():
+        s = base()
+        if threads == 2:
+            s.threaded = True
+            s.threads = 2
+        return s
+    groups = _soft_step._group_contacts_set(4)
+    pool = _soft_step._threaded_min_contacts_set(0)
+    assert _soft_step._reuse_last_colors()
+    try:
+        _soft_step._reuse_last_colors(False)
+        reused = _soft_step._reused_colorings_count()
+        coloured = _state_after(build, 240)
+        assert _soft_step._reused_colorings_count() == reused
+        _soft_step._reuse_last_colors(True)
+        taken_over = _state_after(build, 240)
+        assert _soft_step._reused_colorings_count() > reused, "no colouring was taken over: nothing was tested"
+    finally:
+        _soft_step._reuse_last_colors(True)
+        _soft_step._group_contacts_set(groups)
+        _soft_step._threaded_min_contacts_set(pool)
+    assert len(taken_over) == len(coloured)
+    for i, (t, c) in enumerate(zip(taken_over, coloured)):
+        assert repr(t) == repr(c), f"body {i}: {t} != {c}"
+
+
 @pytest.mark.parametrize("how", ["copy", "pickle"])
 def test_a_copy_at_rest_refreshes_its_leaves_when_one_leaves_its_box(how):
     # A copy's tree is rebuilt from the snapshot, not through its leaves'

@@ -33,7 +33,7 @@ allocation, no Python except user integrators and joints' callbacks. Graph
 colouring and SIMD lanes can partition these arrays later.
 """
 from libc.math cimport INFINITY, pow, sqrt, cos, sin, fabs, fmin, fmax, hypot
-from libc.stdint cimport uint32_t
+from libc.stdint cimport uint32_t, uint64_t
 from libc.limits cimport INT_MAX
 from libc.string cimport memset, memcmp
 from tamias2d._config cimport cpFloat, cpBool, cpTimestamp
@@ -158,9 +158,10 @@ cdef enum:
     SOFT_SCRATCH_COMPONENTS   # the sleeping components' union-find (cpSpaceProcessComponents)
     SOFT_SCRATCH_LOADS        # the piles' loads from their weights (SoftEstimateLoads)
     SOFT_SCRATCH_GROUPS       # the contact groups solved one after the other (SoftFindGroups)
+    SOFT_SCRATCH_OLD_KEYS     # the colouring keys last coloured (SoftKeepColors)
     SOFT_SCRATCH_COUNT
 
-# (cpSoftScratch holds 24 buffers.)
+# (cpSoftScratch holds 25 buffers.)
 
 cdef void *_reserve(cpSpace *space, int which, int need, size_t size) noexcept nogil:
     # Room for `need` elements of `size` bytes in scratch buffer `which`, or
@@ -216,6 +217,7 @@ cdef struct SoftCandidate:
 # them, for its preparation, its bodies' slots and its size, found by the
 # count in arbiter order (from what the narrow phase noted in the arbiter).
 cdef struct SoftColorKey:
+    # (The six ints first, in three 64-bit words: SoftSameColorKeys.)
     int a
     int b
     int kind
@@ -1992,6 +1994,117 @@ cdef bint SoftReserveColors(SoftContext *ctx) noexcept nogil:
             and _reserve_lines(space, SOFT_SCRATCH_LANES, lanes, sizeof(SoftLanes)) != NULL
             and _reserve(space, SOFT_SCRATCH_LANE_LINKS, lanes, sizeof(SoftLaneLinks)) != NULL)
 
+# What a colouring leaves besides its buffers (lane slots, overflow, lanes'
+# empty slots, group lists), for the next step to take it over
+# (cpSoftScratch.colorPlan): made from `contacts` keys of `bodies` body
+# slots, grouped by `groupSize` (0: not grouping), its lanes in the lanes'
+# buffer at `lanesBuffer` (moved, their start on a cache line may shift).
+cdef struct SoftColorPlan:
+    void *lanesBuffer
+    int contacts
+    int bodies
+    int groupSize
+    int overflow
+    int groups
+    int colorLanes[SOFT_GRAPH_COLORS + 1]
+    int colorPairEnd[SOFT_GRAPH_COLORS]
+
+cdef cpSoftScratch _plan_probe
+assert sizeof(SoftColorPlan) <= sizeof(_plan_probe.colorPlan), "cpSoftScratch.colorPlan is too small"
+
+# Off only in tests, which check that taking over the last colouring
+# changes nothing; and the steps (all spaces) that took it over.
+cdef bint _reuse_colors = 1
+cdef volatile long _reused_colorings = 0
+
+cdef bint SoftSameColorKeys(const SoftColorKey *a, const SoftColorKey *b, int n) noexcept nogil:
+    # Whether n keys are the same in what the colouring reads of them: all
+    # but the size (the preparation's, which moves with the shapes' boxes),
+    # as three 64-bit words a key.
+    cdef const uint64_t *x
+    cdef const uint64_t *y
+    cdef uint64_t diff = 0
+    cdef int i
+    for i in range(n):
+        x = <const uint64_t *>&a[i]
+        y = <const uint64_t *>&b[i]
+        diff |= (x[0] ^ y[0]) | (x[1] ^ y[1]) | (x[2] ^ y[2])
+    return diff == 0
+
+cdef inline int SoftGroupSize(SoftContext *ctx) noexcept nogil:
+    return _group_contacts if SoftMayGroup(ctx) else 0
+
+cdef void SoftKeepColors(SoftContext *ctx) noexcept nogil:
+    # This step's colouring, made: its keys kept (the keys' buffer and the
+    # kept one swap places: the preparation still reads ctx.colorKeys,
+    # which nothing reserves before the next colouring) and its plan.
+    cdef cpSoftScratch *scratch = &ctx.space.softScratch
+    cdef SoftColorPlan *plan = <SoftColorPlan *>scratch.colorPlan
+    cdef void *keys = scratch.buf[SOFT_SCRATCH_KEYS]
+    cdef int cap = scratch.cap[SOFT_SCRATCH_KEYS]
+    cdef int c
+    scratch.buf[SOFT_SCRATCH_KEYS] = scratch.buf[SOFT_SCRATCH_OLD_KEYS]
+    scratch.cap[SOFT_SCRATCH_KEYS] = scratch.cap[SOFT_SCRATCH_OLD_KEYS]
+    scratch.buf[SOFT_SCRATCH_OLD_KEYS] = keys
+    scratch.cap[SOFT_SCRATCH_OLD_KEYS] = cap
+    plan.lanesBuffer = scratch.buf[SOFT_SCRATCH_LANES]
+    plan.contacts = ctx.contactCount
+    plan.bodies = ctx.bodyCount
+    plan.groupSize = SoftGroupSize(ctx)
+    plan.overflow = ctx.overflowCount
+    plan.groups = ctx.groupCount
+    if ctx.groupCount == 0:
+        # (Grouped, the groups' own lists say where their colours are.)
+        for c in range(SOFT_GRAPH_COLORS):
+            plan.colorLanes[c] = ctx.colorLanes[c]
+            plan.colorPairEnd[c] = ctx.colorPairEnd[c]
+    plan.colorLanes[SOFT_GRAPH_COLORS] = ctx.colorLanes[SOFT_GRAPH_COLORS]
+    scratch.colorsKnown = 1
+
+cdef bint SoftReuseColors(SoftContext *ctx, int *color) noexcept nogil:
+    # Last step's colouring taken over where this step's keys are the same
+    # (the colouring is a function of them, the body count and the grouping
+    # size): its lane slots (color[], still in their buffer), overflow and
+    # lanes (their empty slots still cleared: no pass writes them) and
+    # group lists as they are. The bodies' contact counts are counted
+    # again. False: colour afresh.
+    cdef cpSpace *space = ctx.space
+    cdef cpSoftScratch *scratch = &space.softScratch
+    cdef SoftColorPlan *plan = <SoftColorPlan *>scratch.colorPlan
+    cdef int n = ctx.contactCount
+    cdef int i, c, total
+    cdef SoftColorKey *key
+    if not (_reuse_colors and scratch.colorsKnown and plan.contacts == n
+            and plan.bodies == ctx.bodyCount and plan.groupSize == SoftGroupSize(ctx)
+            and scratch.buf[SOFT_SCRATCH_OLD_KEYS] != NULL
+            and SoftSameColorKeys(<SoftColorKey *>scratch.buf[SOFT_SCRATCH_OLD_KEYS],
+                                  ctx.colorKeys, n)):
+        return 0
+    total = plan.colorLanes[SOFT_GRAPH_COLORS]
+    # (Their sizes are last step's: the same buffers, not grown.)
+    ctx.lanes = <SoftLanes *>_reserve_lines(space, SOFT_SCRATCH_LANES, total, sizeof(SoftLanes))
+    ctx.laneLinks = <SoftLaneLinks *>_reserve(space, SOFT_SCRATCH_LANE_LINKS, total,
+                                              sizeof(SoftLaneLinks))
+    if ctx.lanes == NULL or ctx.laneLinks == NULL or scratch.buf[SOFT_SCRATCH_LANES] != plan.lanesBuffer:
+        return 0
+    for i in range(n):
+        key = &ctx.colorKeys[i]
+        ctx.bodies[key.ia].contacts += 1
+        ctx.bodies[key.ib].contacts += 1
+    ctx.overflowCount = plan.overflow
+    tamias_add(&_overflow_total, ctx.overflowCount)
+    if plan.groups == 0:
+        for c in range(SOFT_GRAPH_COLORS):
+            ctx.colorLanes[c] = plan.colorLanes[c]
+            ctx.colorPairEnd[c] = plan.colorPairEnd[c]
+    else:
+        SoftGroupLists(ctx, plan.groups)
+    ctx.colorLanes[SOFT_GRAPH_COLORS] = total
+    ctx.contactSlots = color
+    ctx.groupCount = plan.groups
+    tamias_add(&_reused_colorings, 1)
+    return 1
+
 cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
     # Greedy colouring in arbiter order (so a copy continues alike): each
     # contact takes the first colour that holds neither of its movable
@@ -2019,6 +2132,9 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
     ctx.overflow = <int *>_reserve(space, SOFT_SCRATCH_OVERFLOW, n, sizeof(int))
     if used == NULL or color == NULL or ctx.overflow == NULL:
         return 0
+    if SoftReuseColors(ctx, color):
+        return 1
+    space.softScratch.colorsKnown = 0
     memset(used, 0, <size_t>ctx.bodyCount * sizeof(uint32_t))
     for c in range(SOFT_GRAPH_COLORS):
         for kind in range(2):
@@ -2071,7 +2187,10 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
     if grouping and ctx.overflowCount == 0 and 10 * largest < 9 * (ctx.bodyCount - 1):
         groups = SoftFindGroups(ctx, parent)
         if groups >= 2:
-            return SoftColorGroups(ctx, color, groups)
+            if not SoftColorGroups(ctx, color, groups):
+                return 0
+            SoftKeepColors(ctx)
+            return 1
     total = 0
     for c in range(SOFT_GRAPH_COLORS):
         ctx.colorLanes[c] = total
@@ -2105,6 +2224,7 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
             for i in range(counts[kind][c], lanes * SOFT_LANES):
                 SoftLanesClear(&ctx.lanes[start[kind][c] + i // SOFT_LANES],
                                &ctx.laneLinks[start[kind][c] + i // SOFT_LANES], i % SOFT_LANES)
+    SoftKeepColors(ctx)
     return 1
 
 # -- contact groups: the substeps of a part of the scene at a time ---------------------
@@ -2221,6 +2341,24 @@ cdef void SoftSortByKey(const int *key, int shift, int first, int n, int buckets
         start[b] = start[b - 1]
     start[0] = 0
 
+cdef void SoftGroupLists(SoftContext *ctx, int groups) noexcept nogil:
+    # Where SoftColorGroups leaves the groups' lists in the groups' buffer
+    # (after the union-find's parents and roots and the contacts' groups;
+    # the contacts' lists after its counts of each group's colours).
+    cdef int n = ctx.contactCount
+    cdef int bodies = ctx.bodyCount
+    cdef int *bodyList = <int *>ctx.space.softScratch.buf[SOFT_SCRATCH_GROUPS] + 2 * bodies + n
+    cdef int *bodyStart = bodyList + bodies
+    cdef int *lanesOf = bodyStart + (groups + 2)
+    cdef int *pairEnd = lanesOf + groups * (SOFT_GRAPH_COLORS + 1)
+    cdef int *contactList = pairEnd + groups * SOFT_GRAPH_COLORS + groups * 2 * SOFT_GRAPH_COLORS
+    ctx.groupLanes = lanesOf
+    ctx.groupPairEnd = pairEnd
+    ctx.groupBodies = bodyList
+    ctx.groupBodyStart = bodyStart
+    ctx.groupContacts = contactList
+    ctx.groupContactStart = contactList + n
+
 cdef bint SoftColorGroups(SoftContext *ctx, int *color, int groups) noexcept nogil:
     # SoftColorContacts' lanes laid out group by group (each group's
     # colours, two-point lanes first), and its lane slots given in arbiter
@@ -2231,15 +2369,24 @@ cdef bint SoftColorGroups(SoftContext *ctx, int *color, int groups) noexcept nog
     cdef int *parent = <int *>ctx.space.softScratch.buf[SOFT_SCRATCH_GROUPS]
     cdef int *rootGroup = parent + bodies
     cdef int *contactGroup = rootGroup + bodies
-    cdef int *bodyList = contactGroup + n
-    cdef int *bodyStart = bodyList + bodies
-    cdef int *lanesOf = bodyStart + (groups + 2)
-    cdef int *pairEnd = lanesOf + groups * (SOFT_GRAPH_COLORS + 1)
-    cdef int *next = pairEnd + groups * SOFT_GRAPH_COLORS    # [group][kind][colour]
-    cdef int *contactList = next + groups * 2 * SOFT_GRAPH_COLORS
-    cdef int *contactStart = contactList + n
-    cdef int *bodyGroup = contactStart + (groups + 1)
+    cdef int *bodyList
+    cdef int *bodyStart
+    cdef int *lanesOf
+    cdef int *pairEnd
+    cdef int *next                  # [group][kind][colour]
+    cdef int *contactList
+    cdef int *contactStart
+    cdef int *bodyGroup
     cdef int i, g, c, kind, idx, total, count, lanes, slot
+    SoftGroupLists(ctx, groups)
+    bodyList = ctx.groupBodies
+    bodyStart = ctx.groupBodyStart
+    lanesOf = ctx.groupLanes
+    pairEnd = ctx.groupPairEnd
+    next = pairEnd + groups * SOFT_GRAPH_COLORS
+    contactList = ctx.groupContacts
+    contactStart = ctx.groupContactStart
+    bodyGroup = contactStart + (groups + 1)
     memset(next, 0, <size_t>groups * 2 * SOFT_GRAPH_COLORS * sizeof(int))
     for i in range(n):
         next[contactGroup[i] * SOFT_GRAPH_COLORS + color[i]] += 1
@@ -2284,12 +2431,6 @@ cdef bint SoftColorGroups(SoftContext *ctx, int *color, int groups) noexcept nog
         bodyGroup[i] = g if g >= 0 else groups
     SoftSortByKey(bodyGroup, 0, 1, bodies, groups + 1, bodyStart, bodyList)
     ctx.groupCount = groups
-    ctx.groupLanes = lanesOf
-    ctx.groupPairEnd = pairEnd
-    ctx.groupBodies = bodyList
-    ctx.groupBodyStart = bodyStart
-    ctx.groupContacts = contactList
-    ctx.groupContactStart = contactStart
     return 1
 
 cdef inline bint SoftGroupsFinish(SoftContext *ctx) noexcept nogil:
@@ -4068,6 +4209,19 @@ def _keep_broad_phase_pairs(on=None):
     if on is not None:
         _keep_pairs = bool(on)
     return bool(_keep_pairs)
+
+def _reuse_last_colors(on=None):
+    """Whether a step takes over the last step's colouring of its contacts
+    when their colouring keys are the same (and, given `on`, set it first;
+    for tests, which check that colouring every step changes nothing)."""
+    global _reuse_colors
+    if on is not None:
+        _reuse_colors = bool(on)
+    return bool(_reuse_colors)
+
+def _reused_colorings_count():
+    """Steps so far (all spaces) that took over the last step's colouring."""
+    return tamias_load(&_reused_colorings)
 
 def _skip_leaf_refresh(on=None):
     """Whether the broad phase skips the tree's refresh of its leaves when no

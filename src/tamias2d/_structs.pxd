@@ -397,8 +397,8 @@ cdef struct cpSoftSettings:
 # Per-step scratch of the soft solver, owned by the space (grown, never
 # shrunk; freed by cpSpaceDestroy; never copied).
 cdef struct cpSoftScratch:
-    void *buf[24]                # indexed by _soft_step's SOFT_SCRATCH_* (< 24)
-    int cap[24]                  # elements each buffer has room for
+    void *buf[25]                # indexed by _soft_step's SOFT_SCRATCH_* (< 25)
+    int cap[25]                  # elements each buffer has room for
     # The broad phase's last walk, kept in the SOFT_SCRATCH_PAIRS buffer: its
     # pair count and the dynamic tree's version after it (0: no walk kept).
     int pairCount
@@ -409,6 +409,12 @@ cdef struct cpSoftScratch:
     # Waking, sleeping and dropping arbiters reset it (_space_step.pyx,
     # space.pyx); the next step may then leave those lists as they are.
     cpTimestamp threadsClean
+    # The soft step's last colouring of its contacts (SoftColorContacts),
+    # which the next step takes over when its contacts' colouring keys are
+    # those it was made from (kept in a scratch buffer): colorsKnown 0 when
+    # there is none; colorPlan holds _soft_step's SoftColorPlan.
+    bint colorsKnown
+    unsigned long long colorPlan[40]
 
 cdef struct cpContactBufferHeader:
     cpTimestamp stamp
