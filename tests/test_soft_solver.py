@@ -1600,23 +1600,32 @@ def test_arbiter_guesses_change_nothing(scene):
         assert repr(g) == repr(w), f"body {i}: {g} != {w}"
 
 
+def _boxes_on_ground(count, left, half_width):
+    # A space under gravity 900 with a ground segment and `count` boxes of
+    # 20 in columns of five from x = left, resting on it; its boxes' bodies
+    # and shapes.
+    s = tamias2d.Space()
+    s.gravity = 0, -900
+    ground = tamias2d.Segment(s.static_body, (-half_width, 0), (half_width, 0), 2)
+    ground.friction = 0.8
+    s.add(ground)
+    bodies, shapes = [], []
+    for i in range(count):
+        b = tamias2d.Body(1, tamias2d.moment_for_box(1, (20, 20)))
+        b.position = left + 21 * (i % 5), 11 + (i // 5) * 21
+        box = tamias2d.Poly.create_box(b, (20, 20))
+        box.friction = 0.8
+        s.add(b, box)
+        bodies.append(b)
+        shapes.append(box)
+    return s, bodies, shapes
+
+
 def _static_changes():
     # A resting pile whose static world and filters change under it: a
     # static box added into it, the ground moved and reindexed, a filter and
     # a sensor switched, a shape reindexed by hand.
-    s = tamias2d.Space()
-    s.gravity = 0, -900
-    ground = tamias2d.Segment(s.static_body, (-300, 0), (300, 0), 2)
-    ground.friction = 0.8
-    s.add(ground)
-    boxes = []
-    for i in range(15):
-        b = tamias2d.Body(1, tamias2d.moment_for_box(1, (20, 20)))
-        b.position = -140 + 21 * (i % 5), 11 + (i // 5) * 21
-        box = tamias2d.Poly.create_box(b, (20, 20))
-        box.friction = 0.8
-        s.add(b, box)
-        boxes.append(box)
+    s, _, boxes = _boxes_on_ground(15, -140, 300)
 
     def hook(i):
         if i == 60:
@@ -1832,6 +1841,25 @@ def test_contact_groups_on_two_threads_change_nothing():
         assert repr(t) == repr(o), f"body {i}: {t} != {o}"
 
 
+def _assert_switch_changes_nothing(build, switch, counter, nothing_tested):
+    # A soft-step switch off, the scene's state after 240 steps (the
+    # switch's counter untouched), then on again (the counter advanced):
+    # the same bits.
+    assert switch()
+    try:
+        switch(False)
+        before = counter()
+        off = _state_after(build, 240)
+        assert counter() == before
+    finally:
+        switch(True)
+    on = _state_after(build, 240)
+    assert counter() > before, nothing_tested
+    assert len(on) == len(off)
+    for i, (a, b) in enumerate(zip(on, off)):
+        assert repr(a) == repr(b), f"body {i}: {a} != {b}"
+
+
 @pytest.mark.parametrize("scene", ["pyramid", "add_remove", "type_changes", "sleepy_pile",
                                    "static_changes", "rain_persistence_0"])
 def test_kept_broad_phase_walks_change_nothing(scene):
@@ -1840,21 +1868,9 @@ def test_kept_broad_phase_walks_change_nothing(scene):
     # the tree instead of walking it again: the same pairs in the same order,
     # so the same step. Any change to the trees must end that.
     from tamias2d import _soft_step
-    build = _switch_scene(scene)
-    assert _soft_step._keep_broad_phase_pairs()
-    try:
-        _soft_step._keep_broad_phase_pairs(False)
-        walked = _soft_step._kept_walks_count()
-        without = _state_after(build, 240)
-        assert _soft_step._kept_walks_count() == walked
-    finally:
-        _soft_step._keep_broad_phase_pairs(True)
-    kept = _soft_step._kept_walks_count()
-    with_kept = _state_after(build, 240)
-    assert _soft_step._kept_walks_count() > kept, "no step kept its walk: nothing was tested"
-    assert len(with_kept) == len(without)
-    for i, (k, w) in enumerate(zip(with_kept, without)):
-        assert repr(k) == repr(w), f"body {i}: {k} != {w}"
+    _assert_switch_changes_nothing(_switch_scene(scene), _soft_step._keep_broad_phase_pairs,
+                                   _soft_step._kept_walks_count,
+                                   "no step kept its walk: nothing was tested")
 
 
 def _disturbed_pile():
@@ -1862,20 +1878,7 @@ def _disturbed_pile():
     # box nudged within its leaf's box, one lifted out of it, a shape
     # reindexed by hand, a box taken out and put back, a kinematic board
     # pushed into a corner of the pile, a box turned kinematic.
-    s = tamias2d.Space()
-    s.gravity = 0, -900
-    ground = tamias2d.Segment(s.static_body, (-400, 0), (400, 0), 2)
-    ground.friction = 0.8
-    s.add(ground)
-    bodies, shapes = [], []
-    for i in range(20):
-        b = tamias2d.Body(1, tamias2d.moment_for_box(1, (20, 20)))
-        b.position = -100 + 21 * (i % 5), 11 + (i // 5) * 21
-        box = tamias2d.Poly.create_box(b, (20, 20))
-        box.friction = 0.8
-        s.add(b, box)
-        bodies.append(b)
-        shapes.append(box)
+    s, bodies, shapes = _boxes_on_ground(20, -100, 400)
     board = tamias2d.Body(body_type=tamias2d.Body.KINEMATIC)
     board.position = -180, 30
     plank = tamias2d.Poly.create_box(board, (60, 10))
@@ -1915,20 +1918,9 @@ def test_skipped_leaf_refreshes_change_nothing(scene):
     # moved, reindexed, added and removed, kinematic ones and sleep must
     # keep the copies right: the same bits as refreshing every step.
     from tamias2d import _soft_step
-    build = _switch_scene(scene)
-    assert _soft_step._skip_leaf_refresh()
-    try:
-        _soft_step._skip_leaf_refresh(False)
-        skipped = _soft_step._skipped_refreshes_count()
-        refreshed = _state_after(build, 240)
-        assert _soft_step._skipped_refreshes_count() == skipped
-    finally:
-        _soft_step._skip_leaf_refresh(True)
-    with_skips = _state_after(build, 240)
-    assert _soft_step._skipped_refreshes_count() > skipped, "no refresh was skipped: nothing was tested"
-    assert len(with_skips) == len(refreshed)
-    for i, (k, r) in enumerate(zip(with_skips, refreshed)):
-        assert repr(k) == repr(r), f"body {i}: {k} != {r}"
+    _assert_switch_changes_nothing(_switch_scene(scene), _soft_step._skip_leaf_refresh,
+                                   _soft_step._skipped_refreshes_count,
+                                   "no refresh was skipped: nothing was tested")
 
 
 def _heavy_on_lights():
@@ -1962,22 +1954,13 @@ def test_taking_over_the_last_colouring_changes_nothing(scene, threads):
         return s
     groups = _soft_step._group_contacts_set(4)
     pool = _soft_step._threaded_min_contacts_set(0)
-    assert _soft_step._reuse_last_colors()
     try:
-        _soft_step._reuse_last_colors(False)
-        reused = _soft_step._reused_colorings_count()
-        coloured = _state_after(build, 240)
-        assert _soft_step._reused_colorings_count() == reused
-        _soft_step._reuse_last_colors(True)
-        taken_over = _state_after(build, 240)
-        assert _soft_step._reused_colorings_count() > reused, "no colouring was taken over: nothing was tested"
+        _assert_switch_changes_nothing(build, _soft_step._reuse_last_colors,
+                                       _soft_step._reused_colorings_count,
+                                       "no colouring was taken over: nothing was tested")
     finally:
-        _soft_step._reuse_last_colors(True)
         _soft_step._group_contacts_set(groups)
         _soft_step._threaded_min_contacts_set(pool)
-    assert len(taken_over) == len(coloured)
-    for i, (t, c) in enumerate(zip(taken_over, coloured)):
-        assert repr(t) == repr(c), f"body {i}: {t} != {c}"
 
 
 @pytest.mark.parametrize("how", ["copy", "pickle"])
