@@ -1425,7 +1425,9 @@ cdef inline int SoftLighterSide(const SoftBody *a, const SoftBody *b) noexcept n
         return 2
     return 0
 
-cdef inline int SoftBlockRoot(int *parent, int slot) noexcept nogil:
+cdef inline int SoftUnionRoot(int *parent, int slot) noexcept nogil:
+    # A slot's root in a union-find (the blocks', the contact groups'),
+    # halving the path on the way.
     while parent[slot] != slot:
         parent[slot] = parent[parent[slot]]
         slot = parent[slot]
@@ -1501,8 +1503,8 @@ cdef void SoftGroupBlocks(SoftContext *ctx, const int *light, int *parent,
     for i in range(n):
         key = &ctx.colorKeys[i]
         if key.a != 0 and key.b != 0 and light[key.ia] and light[key.ib]:
-            ra = SoftBlockRoot(parent, key.ia)
-            rb = SoftBlockRoot(parent, key.ib)
+            ra = SoftUnionRoot(parent, key.ia)
+            rb = SoftUnionRoot(parent, key.ib)
             if ra != rb:
                 parent[rb if ra < rb else ra] = ra if ra < rb else rb
     # Each contact's block (ctx.blockNext for now), and each block's rows.
@@ -1510,9 +1512,9 @@ cdef void SoftGroupBlocks(SoftContext *ctx, const int *light, int *parent,
         key = &ctx.colorKeys[i]
         root = -1
         if key.ia != 0 and light[key.ia]:
-            root = SoftBlockRoot(parent, key.ia)
+            root = SoftUnionRoot(parent, key.ia)
         elif key.ib != 0 and light[key.ib]:
-            root = SoftBlockRoot(parent, key.ib)
+            root = SoftUnionRoot(parent, key.ib)
         ctx.blockNext[i] = root
         if root >= 0:
             arb = <cpArbiter *>ctx.space.arbiters.arr[ctx.contactSource[i]]
@@ -2271,12 +2273,6 @@ cdef int *SoftReserveGroups(SoftContext *ctx) noexcept nogil:
             parent[bodies + i] = 1      # (its component's bodies, while joining)
     return parent
 
-cdef inline int SoftGroupRoot(int *parent, int slot) noexcept nogil:
-    while parent[slot] != slot:
-        parent[slot] = parent[parent[slot]]
-        slot = parent[slot]
-    return slot
-
 cdef inline bint SoftGroupJoin(int *parent, int *size, const SoftColorKey *key,
                                int *largest) noexcept nogil:
     # Contact key's bodies into one component (the smaller under the
@@ -2286,8 +2282,8 @@ cdef inline bint SoftGroupJoin(int *parent, int *size, const SoftColorKey *key,
     if (key.ia != 0 and key.a == 0) or (key.ib != 0 and key.b == 0) or (key.a == 0 and key.b == 0):
         return 0
     if key.a != 0 and key.b != 0:
-        a = SoftGroupRoot(parent, key.a)
-        b = SoftGroupRoot(parent, key.b)
+        a = SoftUnionRoot(parent, key.a)
+        b = SoftUnionRoot(parent, key.b)
         if a != b:
             if size[a] < size[b]:
                 a, b = b, a
@@ -2310,7 +2306,7 @@ cdef int SoftFindGroups(SoftContext *ctx, int *parent) noexcept nogil:
         rootGroup[i] = -1
     for i in range(n):
         key = &ctx.colorKeys[i]
-        r = SoftGroupRoot(parent, key.a if key.a != 0 else key.b)
+        r = SoftUnionRoot(parent, key.a if key.a != 0 else key.b)
         if rootGroup[r] < 0:
             if current < 0 or currentContacts >= _group_contacts:
                 current += 1
@@ -2427,7 +2423,7 @@ cdef bint SoftColorGroups(SoftContext *ctx, int *color, int groups) noexcept nog
     # (`groups`) the bodies in no contact.
     SoftSortByKey(contactGroup, 1, 0, n, groups, contactStart, contactList)
     for i in range(1, bodies):
-        g = rootGroup[SoftGroupRoot(parent, i)]
+        g = rootGroup[SoftUnionRoot(parent, i)]
         bodyGroup[i] = g if g >= 0 else groups
     SoftSortByKey(bodyGroup, 0, 1, bodies, groups + 1, bodyStart, bodyList)
     ctx.groupCount = groups
