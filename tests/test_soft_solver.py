@@ -1963,6 +1963,59 @@ def test_taking_over_the_last_colouring_changes_nothing(scene, threads):
         _soft_step._threaded_min_contacts_set(pool)
 
 
+def _kicking_piles(phase):
+    # _separate_piles whose balls are kicked up by a collision callback of
+    # `phase` ("separate": as they leave a pile, in the step's middle;
+    # "post_solve": after each step's solve).
+    s = _separate_piles()
+
+    def kick(arbiter, space, data):
+        for shape in arbiter.shapes:
+            if isinstance(shape, tamias2d.Circle):
+                shape.body.velocity += (3, 40)
+    s.on_collision(None, None, **{phase: kick})
+    return s
+
+
+_SWITCH_SCENES["post_solve_kicks"] = lambda: _kicking_piles("post_solve")
+
+
+@pytest.mark.parametrize("scene", ["pyramid", "separate_piles", "disturbed_pile", "kinematic_floor",
+                                   "add_remove", "type_changes", "static_changes", "heavy_on_lights",
+                                   "rain_persistence_1", "persistence_toggled", "post_solve_kicks"])
+def test_keys_counted_in_the_narrow_phase_change_nothing(scene):
+    # On one thread, with no handler acting before the solve and sleeping
+    # off, the bodies are gathered before the narrow phase and each
+    # arbiter's colouring key is found as the narrow phase accepts it: the
+    # same keys, so the same bits, as the count's own pass. (At collision
+    # persistence 0, which `persistence_toggled` switches to and from, the
+    # cache's filter empties the step's arbiters after the narrow phase:
+    # those steps count in the pass.)
+    from tamias2d import _soft_step
+    _assert_switch_changes_nothing(_switch_scene(scene), _soft_step._count_keys_in_narrow,
+                                   _soft_step._narrow_counts_count,
+                                   "no step counted its keys in the narrow phase: nothing was tested")
+
+
+@pytest.mark.parametrize("phase", ["separate", "begin", "pre_solve"])
+def test_keys_are_not_counted_early_where_a_callback_may_change_a_body(phase):
+    # A separate callback runs after the narrow phase (the arbiter cache's
+    # filter), begin and pre-solve ones in it: each may change a body that
+    # an early gather would already have read. Those steps gather after
+    # them, as before: the same bits with the switch on or off.
+    from tamias2d import _soft_step
+    assert _soft_step._count_keys_in_narrow()
+    try:
+        _soft_step._count_keys_in_narrow(False)
+        off = _state_after(lambda: _kicking_piles(phase), 120)
+    finally:
+        _soft_step._count_keys_in_narrow(True)
+    before = _soft_step._narrow_counts_count()
+    on = _state_after(lambda: _kicking_piles(phase), 120)
+    assert _soft_step._narrow_counts_count() == before
+    assert on == off
+
+
 @pytest.mark.parametrize("how", ["copy", "pickle"])
 def test_a_copy_at_rest_refreshes_its_leaves_when_one_leaves_its_box(how):
     # A copy's tree is rebuilt from the snapshot, not through its leaves'

@@ -280,6 +280,9 @@ cdef struct SoftContext:
     cpArbiter **pairArbiters  # ... and each updated pair's arbiter (the candidate's, packed)
     bint updateInNarrow       # no begin or pre-solve callbacks: arbiters updated in parallel
     bint acceptInNarrow       # ... and one thread: the narrow phase also does SoftAcceptPair's part
+    bint keysInNarrow         # ... and the bodies gathered before it: it also counts each arbiter it accepts (SoftKeyAccepted)
+    int keyed                 # ... how many (the first of space.arbiters)
+    int keySeen               # ... their SOFT_SEEN_* bits
     volatile long elastic     # a contact has restitution (set by SoftCountRange)
     volatile long customVelocity  # a body has its own velocity_func (SoftGatherRange)
     volatile long customPosition  # ... position_func
@@ -425,6 +428,9 @@ cdef volatile long _kept_walks = 0
 # Whether the leaves' refresh is skipped when no shape left its leaf's box
 # (off only in tests), and the steps so far (all spaces) that skipped it.
 cdef bint _skip_refresh = 1
+# SoftKeysMayBeCounted (off only in tests, which compare).
+cdef bint _count_in_narrow = 1
+cdef volatile long _narrow_counts = 0
 cdef volatile long _skipped_refreshes = 0
 # Contacts solved one by one so far, outside the colours (for tests).
 cdef volatile long _overflow_total = 0
@@ -524,6 +530,12 @@ cdef inline void SoftFetchShape(const cpShape *shape) noexcept nogil:
     SoftFetchLines(shape, sizeof(cpPolyShape)
                    - CP_POLY_SHAPE_INLINE_ALLOC * sizeof(cpSplittingPlane))
 
+cdef inline void SoftFetchKeySlot(SoftContext *ctx, int slot) noexcept nogil:
+    if 0 < slot < ctx.bodyCount:
+        tamias_prefetch(&ctx.bodies[slot])
+        if ctx.estimating:
+            tamias_prefetch(&ctx.motion[slot].px)
+
 cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
     # First the cheap rejection (most pairs of the broad phase, whose boxes
     # are widened for continuous collision, go no further). Also finds a
@@ -568,6 +580,10 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
             tamias_prefetch(&(<cpShape *>q.a).body.isBullet)
             tamias_prefetch(&(<cpShape *>q.b).body.m_inv)
             tamias_prefetch(&(<cpShape *>q.b).body.isBullet)
+            if ctx.keysInNarrow:
+                # And the two body slots the key will read (SoftKeyAccepted).
+                SoftFetchKeySlot(ctx, (<cpShape *>q.a).softSlot)
+                SoftFetchKeySlot(ctx, (<cpShape *>q.b).softSlot)
         if cpSpaceRejectPair(ctx.space, a, b, &margin):
             ctx.touching[i] = 0
             continue
@@ -749,7 +765,7 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     collector.complete = 1
     collector.grow = SoftGrowPairs
     collector.data = space
-    ctx.updateInNarrow = not cpSpaceHasHandlers(space, 1, 1, 0)
+    ctx.updateInNarrow = not cpSpaceHasHandlers(space, 1, 1, 0, 0)
     # The last walk of the tree's pairs is kept: while no leaf leaves its
     # box and nothing is added or removed, the next steps take their pairs
     # from there.
@@ -757,6 +773,7 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     walked = known
     if not cpBBTreeReindexCollect(space.dynamicShapes, &collector, &walked, inside):
         # A spatial hash: pair by pair, as the chipmunk solver.
+        ctx.keysInNarrow = 0
         space.softScratch.pairsVersion = 0
         cpSpatialIndexReindexQuery(space.dynamicShapes, cpSpaceCollideShapes, space)
         return
@@ -770,6 +787,7 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
         space.softScratch.pairCount = ctx.pairCount
     n = ctx.pairCount
     ctx.acceptInNarrow = ctx.updateInNarrow and not ctx.threaded
+    ctx.keysInNarrow = ctx.keysInNarrow and ctx.acceptInNarrow and SoftReserveKeys(ctx, n)
     ctx.candidates = NULL
     if not ctx.acceptInNarrow:
         ctx.candidates = <SoftCandidate *>_reserve(space, SOFT_SCRATCH_CANDIDATES, n,
@@ -897,6 +915,7 @@ cdef void SoftAcceptPlaced(SoftContext *ctx, int i, SoftCandidate *c,
     # buffer at `contacts`.
     cdef cpSpace *space = ctx.space
     cdef cpArbiter *arb = c.arb
+    cdef int before = space.arbiters.num
     c.info.arr = contacts
     if c.updated:
         arb.contacts = contacts
@@ -913,6 +932,8 @@ cdef void SoftAcceptPlaced(SoftContext *ctx, int i, SoftCandidate *c,
         ctx.youngPairs += 1
     if ctx.pairs[i].slot != NULL and c.arb == NULL:
         ctx.pairs[i].slot.arbiter = arb    # new this step: next step's guess
+    if ctx.keysInNarrow and space.arbiters.num == before + 1:
+        SoftKeyAccepted(ctx, before)
 
 
 # -- the bodies' arbiter lists -----------------------------------------------------------
@@ -947,7 +968,7 @@ cdef void SoftResetArbiters(SoftContext *ctx) noexcept nogil:
     # Anything that wakes or sleeps a body or drops an arbiter from here on
     # resets it (see SoftProcessComponents).
     space.softScratch.threadsClean = space.stamp
-    if (_keep_threads and space.collisionPersistence > 0 and not cpSpaceHasHandlers(space, 1, 1, 0)
+    if (_keep_threads and space.collisionPersistence > 0 and not cpSpaceHasHandlers(space, 1, 1, 0, 0)
             and (not sleep or (ctx.threadsEmptied and clean))):
         saved = <void **>_reserve(space, SOFT_SCRATCH_THREADED, arbiters.num, sizeof(void *))
         if saved != NULL:
@@ -1359,14 +1380,20 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     cdef cpArbiter *arb
     ctx.contacts = <SoftContact *>_reserve(space, SOFT_SCRATCH_CONTACTS, arbiters.num,
                                            sizeof(SoftContact))
-    ctx.contactSource = <int *>_reserve(space, SOFT_SCRATCH_SOURCE, arbiters.num, sizeof(int))
-    ctx.colorKeys = <SoftColorKey *>_reserve(space, SOFT_SCRATCH_KEYS, arbiters.num,
-                                             sizeof(SoftColorKey))
-    if ctx.contacts == NULL or ctx.contactSource == NULL or ctx.colorKeys == NULL:
+    if ctx.contacts == NULL:
         return 0
-    ctx.loadEstimates = NULL
-    if ctx.estimating and not SoftReserveLoads(ctx, arbiters.num):
-        ctx.estimating = 0      # (out of memory: the flag is up; no estimates)
+    if not ctx.keysInNarrow:
+        ctx.contactSource = <int *>_reserve(space, SOFT_SCRATCH_SOURCE, arbiters.num, sizeof(int))
+        ctx.colorKeys = <SoftColorKey *>_reserve(space, SOFT_SCRATCH_KEYS, arbiters.num,
+                                                 sizeof(SoftColorKey))
+        if ctx.contactSource == NULL or ctx.colorKeys == NULL:
+            return 0
+        ctx.loadEstimates = NULL
+        if ctx.estimating and not SoftReserveLoads(ctx, arbiters.num):
+            ctx.estimating = 0      # (out of memory: the flag is up; no estimates)
+    # (Else SoftReserveKeys made them, for as many contacts as pairs: the
+    # loads' arrays laid out for that many, which SoftEstimateLoads's for
+    # fewer fit within.)
     ctx.warmCoef = ctx.h / prev_dt if prev_dt != 0.0 else 0.0
     ctx.loadCoef = 1.0 / prev_dt if prev_dt != 0.0 else 0.0
     # On the pool; an arbiter without contacts (only after a failed
@@ -1374,7 +1401,12 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     tamias_store(&ctx.emptyArbiter, 0)
     tamias_store(&ctx.ratioPairs, 0)
     ctx.blockBodyCount = 0
-    SoftRun(ctx, SOFT_TASK_COUNT, 0, arbiters.num, 0)
+    if ctx.keysInNarrow:
+        # (Counted already: SoftKeyAccepted.)
+        tamias_add(&_narrow_counts, 1)
+        SoftStoreSeen(ctx, ctx.keySeen)
+    else:
+        SoftRun(ctx, SOFT_TASK_COUNT, 0, arbiters.num, 0)
     if tamias_load(&ctx.emptyArbiter):
         for i in range(arbiters.num):
             arb = <cpArbiter *>arbiters.arr[i]
@@ -1774,6 +1806,57 @@ cdef void SoftCountRange(SoftContext *ctx, int begin, int end) noexcept nogil:
         ctx.contactSource[i] = i
         seen |= SoftCountContact(ctx, arb, i)
     SoftStoreSeen(ctx, seen)
+
+# Counted in the narrow phase. On one thread, where nothing between the
+# narrow phase and the preparation can change a body (no collision handler
+# that runs Python, nothing asleep or put to sleep), the bodies are gathered
+# before the narrow phase, and each arbiter's key is found as the narrow
+# phase accepts it, with the arbiter and its contacts in cache: the count's
+# pass over the arbiters, a cache miss or more each, is not made. The same
+# keys from the same arithmetic; checked again before they are used
+# (SoftKeysHold), or counted by that pass after all.
+
+cdef bint SoftKeysMayBeCounted(SoftContext *ctx) noexcept nogil:
+    # Whether this step's keys can be counted in its narrow phase: then the
+    # bodies are gathered now.
+    cdef cpSpace *space = ctx.space
+    # (At collision persistence 0 the arbiter cache's filter empties this
+    # step's arbiters after the narrow phase: the count skips them.)
+    if not (_count_in_narrow and not ctx.threaded and space.sleepTimeThreshold == INFINITY
+            and space.sleepingComponents.num == 0 and space.collisionPersistence > 0
+            and not cpSpaceHasHandlers(space, 1, 1, 0, 1)):
+        return 0
+    return SoftGatherBodies(ctx)
+
+cdef bint SoftReserveKeys(SoftContext *ctx, int pairs) noexcept nogil:
+    # The count's arrays, before the narrow phase: for as many arbiters as
+    # there are pairs (each pair adds one at most).
+    cdef cpSpace *space = ctx.space
+    ctx.contactSource = <int *>_reserve(space, SOFT_SCRATCH_SOURCE, pairs, sizeof(int))
+    ctx.colorKeys = <SoftColorKey *>_reserve(space, SOFT_SCRATCH_KEYS, pairs, sizeof(SoftColorKey))
+    if ctx.contactSource == NULL or ctx.colorKeys == NULL:
+        return 0
+    if ctx.estimating and not SoftReserveLoads(ctx, pairs):
+        ctx.estimating = 0      # (out of memory: the flag is up; no estimates)
+    ctx.keyed = 0
+    ctx.keySeen = 0
+    return space.arbiters.num == 0
+
+cdef void SoftKeyAccepted(SoftContext *ctx, int n) noexcept nogil:
+    # Arbiter n, just put on the step's list by the narrow phase: its key.
+    cdef cpArbiter *arb = <cpArbiter *>ctx.space.arbiters.arr[n]
+    if n != ctx.keyed or arb.count <= 0 or arb.contacts == NULL:
+        ctx.keysInNarrow = 0    # (the count's pass, which skips an empty one)
+        return
+    ctx.contactSource[n] = n
+    ctx.keySeen |= SoftCountContact(ctx, arb, n)
+    ctx.keyed = n + 1
+
+cdef inline bint SoftKeysHold(SoftContext *ctx) noexcept nogil:
+    # The keys counted in the narrow phase are the step's: they cover its
+    # arbiters, and its bodies are the ones gathered.
+    return (ctx.keysInNarrow and ctx.keyed == ctx.space.arbiters.num
+            and ctx.bodyCount == ctx.space.dynamicBodies.num + 1)
 
 cdef inline cpVect SoftSlotPosition(SoftContext *ctx, int slot, const cpBody *body) noexcept nogil:
     # A body's position as gathered (slot 0's from the body: static or
@@ -4067,6 +4150,8 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     ctx.fetchAhead = space.arbiters.num >= _fetch_min_contacts
     ctx.threaded = SoftPoolAcquire(space)
     SoftResetArbiters(&ctx)
+    ctx.keysInNarrow = SoftKeysMayBeCounted(&ctx)
+    SoftProfileMark(SOFT_STAGE_PREPARE)
     cpSpaceLock(space)
     # No position update before the narrow phase: this solver moves the
     # bodies inside its substeps.
@@ -4086,7 +4171,9 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
         # substeps carry the load down the pile before it has fallen far.
         SoftSetSubsteps(&ctx, dt, ctx.substeps * SOFT_YOUNG_SUBSTEPS)
     SoftProfileMark(SOFT_STAGE_COMPONENTS)
-    ready = (SoftGatherBodies(&ctx) and SoftPrepareJoints(&ctx, prev_dt)
+    if ctx.keysInNarrow and not SoftKeysHold(&ctx):
+        ctx.keysInNarrow = 0
+    ready = ((ctx.keysInNarrow or SoftGatherBodies(&ctx)) and SoftPrepareJoints(&ctx, prev_dt)
              and SoftPrepareContacts(&ctx, prev_dt))
     SoftProfileMark(SOFT_STAGE_PREPARE)
     if ready and ctx.estimatePending:
@@ -4231,6 +4318,20 @@ def _skip_leaf_refresh(on=None):
 def _skipped_refreshes_count():
     """Steps so far (all spaces) whose broad phase skipped the leaves' refresh."""
     return tamias_load(&_skipped_refreshes)
+
+def _count_keys_in_narrow(on=None):
+    """Whether a soft step on one thread, with no handler and sleeping off,
+    gathers its bodies before the narrow phase and counts the colouring
+    keys there (and, given `on`, set it first; for tests, which check that
+    the count's own pass gives the same)."""
+    global _count_in_narrow
+    if on is not None:
+        _count_in_narrow = bool(on)
+    return bool(_count_in_narrow)
+
+def _narrow_counts_count():
+    """Steps so far (all spaces) whose keys were counted in the narrow phase."""
+    return tamias_load(&_narrow_counts)
 
 def _keep_arbiter_threads(on=None):
     """Whether a soft step leaves last step's arbiters threaded on their

@@ -112,7 +112,7 @@ cdef inline bint cpSpaceAcceptUpdated(cpSpace *space, cpArbiter *arb, bint solid
     return 1
 # Whether any collision handler of the space acts in one of these phases.
 cdef bint cpSpaceHasHandlers(cpSpace *space, bint begin, bint preSolve,
-                             bint postSolve) noexcept nogil
+                             bint postSolve, bint separate) noexcept nogil
 cdef cpBool cpSpaceArbiterSetFilter(void *arb, void *space) noexcept nogil
 # cpShapeCacheBB as a spatial-index iterator.
 cdef void cpShapeUpdateFunc(void *shape, void *unused) noexcept nogil

@@ -438,13 +438,14 @@ cdef void StageSolve(cpSpace *space, cpFloat dt) noexcept nogil:
             constraint.klass.applyImpulse(constraint, dt)
 
 cdef struct HandlerSearch:
-    bint begin, preSolve, postSolve       # the phases asked about
+    bint begin, preSolve, postSolve, separate     # the phases asked about
     bint found
 
 cdef inline bint _handlerActs(const cpCollisionHandler *h, const HandlerSearch *search) noexcept nogil:
     return ((search.begin and h.beginFunc != cpCollisionDoNothing)
             or (search.preSolve and h.preSolveFunc != cpCollisionDoNothing)
-            or (search.postSolve and h.postSolveFunc != cpCollisionDoNothing))
+            or (search.postSolve and h.postSolveFunc != cpCollisionDoNothing)
+            or (search.separate and h.separateFunc != cpCollisionDoNothing))
 
 cdef void _noteHandler(void *elt, void *data) noexcept nogil:
     cdef HandlerSearch *search = <HandlerSearch *>data
@@ -452,13 +453,14 @@ cdef void _noteHandler(void *elt, void *data) noexcept nogil:
         search.found = 1
 
 cdef bint cpSpaceHasHandlers(cpSpace *space, bint begin, bint preSolve,
-                             bint postSolve) noexcept nogil:
+                             bint postSolve, bint separate) noexcept nogil:
     # Whether any handler does something in one of these phases (a handful
     # of handlers to look at, against a pass over every arbiter).
     cdef HandlerSearch search
     search.begin = begin
     search.preSolve = preSolve
     search.postSolve = postSolve
+    search.separate = separate
     search.found = _handlerActs(&space.globalHandler, &search)
     if not search.found:
         cpHashSetEach(space.collisionHandlers, _noteHandler, &search)
@@ -474,7 +476,7 @@ cdef void StagePostSolve(cpSpace *space) noexcept nogil:
         constraint = <cpConstraint *>constraints.arr[i]
         if constraint.postSolve != NULL:
             constraint.postSolve(constraint, space)
-    if not cpSpaceHasHandlers(space, 0, 0, 1):
+    if not cpSpaceHasHandlers(space, 0, 0, 1, 0):
         # Nothing to call: the pass would only flip `swapped` an even number
         # of times per arbiter.
         return
