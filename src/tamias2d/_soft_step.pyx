@@ -3475,11 +3475,18 @@ cdef void SoftUnpackLanes(SoftContext *ctx, int begin, int end, bint store) noex
     for i in range(begin, end):
         ln = &ctx.lanes[i]
         links = &ctx.laneLinks[i]
-        if ctx.fetchAhead and store and i + 1 < end:
-            # The next lane's arbiters' contacts (scattered in memory).
+        if ctx.fetchAhead and store and i + 2 < end:
+            # The arbiters' contacts two lanes on (scattered in memory): the
+            # lines their impulses are written to (a two-point manifold's
+            # lie on three).
             for k in range(SOFT_LANES):
-                if links[1].src[k] >= 0:
-                    tamias_prefetch(links[1].dst[k])
+                if links[2].src[k] >= 0:
+                    con = <cpContact *>links[2].dst[k]
+                    tamias_prefetch_write(&con[0].jnAcc)
+                    tamias_prefetch_write(&con[0].jtAcc)
+                    if ln[2].points == 2:
+                        tamias_prefetch_write(&con[1].jnAcc)
+                        tamias_prefetch_write(&con[1].jtAcc)
         for k in range(SOFT_LANES):
             if links.src[k] < 0:
                 continue
