@@ -91,9 +91,13 @@ def body_state(b):
     return (*b.position, b.angle, *b.velocity, b.angular_velocity)
 
 
-def small_scene():
-    """A space with a static floor, a dynamic circle and a dynamic box."""
-    s = Space()
+def small_scene(solver="chipmunk"):
+    """A space with a static floor, a dynamic circle and a dynamic box
+    (`solver`: the space's; "soft2", the soft one on two threads)."""
+    s = Space(threaded=solver == "soft2")
+    if solver != "chipmunk":
+        s.solver = "soft"
+        s.threads = 2 if solver == "soft2" else 1
     s.gravity = 0, -100
     floor = Segment(s.static_body, (-100, 0), (100, 0), 1)
     floor.friction = 0.5
@@ -645,14 +649,17 @@ def test_negative_dt_raises():
     assert_usable(s)
 
 
+# (The soft step checks the awake bodies as it writes them back, not in a
+# pass of its own after the step: cpSoftStep.)
+@pytest.mark.parametrize("solver", ["chipmunk", "soft", "soft2"])
 @isolated(timeout=60)
-def test_overflowing_step_raises_instead_of_nan():
+def test_overflowing_step_raises_instead_of_nan(solver):
     # Bug (fixed in space.pyx): a finite but huge input that overflows during
     # the step left bodies at NaN with no exception (pymunk too). The step
     # now checks the bodies it moved: IllegalBody names the body, the space
     # refuses to step while it is non-finite, and steps again once the body
     # is reset.
-    s, bodies = small_scene()
+    s, bodies = small_scene(solver)
     with pytest.raises(IllegalBody, match="overflowed") as info:
         s.step(1e308)
     bad = info.value.bodies
@@ -666,8 +673,9 @@ def test_overflowing_step_raises_instead_of_nan():
         assert finite(*body_state(b))
 
 
+@pytest.mark.parametrize("solver", ["chipmunk", "soft", "soft2"])
 @isolated(timeout=60)
-def test_overflow_from_huge_shapes_or_speeds_raises():
+def test_overflow_from_huge_shapes_or_speeds_raises(solver):
     # The same check catches overflows that start elsewhere than dt. Each
     # maker sets something huge and returns how to undo it; once undone and
     # the named bodies reset, the space must step on finite (the warm-start
@@ -689,7 +697,7 @@ def test_overflow_from_huge_shapes_or_speeds_raises():
         bodies[1].angular_velocity = 1e308
         return lambda: None
     for make_huge in (surface, speed, radius, jointed):
-        s, bodies = small_scene()
+        s, bodies = small_scene(solver)
         undo = make_huge(s, bodies)
         try:
             for _ in range(10):

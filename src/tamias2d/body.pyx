@@ -229,8 +229,16 @@ cdef inline void _set_transform(cpBody *body, cpVect p, cpFloat a) noexcept nogi
 
 
 cdef void cpBodySetPosition(cpBody *body, cpVect position) noexcept nogil:
+    cdef cpVect offset
     cpBodyActivate(body)
-    body.p = cpvadd(cpTransformVect(body.transform, body.cog), position)
+    offset = cpTransformVect(body.transform, body.cog)
+    if not (isfinite(offset.x) and isfinite(offset.y)):
+        # A body that an overflowed step left non-finite (its angle NaN):
+        # its centre of gravity is taken at angle 0, so that the position
+        # set is the one kept; Munk2D's would stay NaN whatever is set, and
+        # the space would refuse to step on (the angle is set next).
+        offset = body.cog
+    body.p = cpvadd(offset, position)
     _set_transform(body, body.p, body.a)
 
 
