@@ -284,6 +284,6 @@ cdef void SoftScratchFree(cpSoftScratch *scratch) noexcept nogil
 cdef cpFloat SoftPushOut(const cpSpace *space) noexcept nogil
 cdef cpFloat SoftSpeculative(const cpSpace *space) noexcept nogil
 
-cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil
+cdef bint cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil
 # Start the worker thread of threaded soft steps if it is not running (GIL).
 cdef int SoftPoolEnsure() except -1

@@ -59,7 +59,7 @@ from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, StageResetArbiter
     cpArbiterIsSolved, cpSpaceAcceptUpdated,
     cpContactBuffer, CP_CONTACTS_BUFFER_SIZE,
     cpShapeUpdateFunc,
-    cpSpaceHasHandlers)
+    cpSpaceHasHandlers, _bodyNonFinite)
 from tamias2d.arbiter cimport cpArbiterUpdate, cpArbiterUnthread, cpArbiterPushThreads
 from tamias2d._spatialindex cimport (cpSpatialIndexEach, cpSpatialIndexReindexQuery,
     cpSpatialIndexCount)
@@ -288,6 +288,8 @@ cdef struct SoftContext:
     volatile long customPosition  # ... position_func
     volatile long emptyArbiter    # an arbiter has no contacts (SoftCountRange)
     volatile long uncachedArbiter # last step's arbiters include a pooled one (SoftMarkThreaded)
+    volatile long bodiesFinished  # bodies written back (SoftFinishBodies) ...
+    volatile long bodiesNonFinite # ... and of those, non-finite ones
     volatile long ratioPairs      # a contact's bodies' masses differ SOFT_BLOCK_RATIO times or more
     int *blockBodies          # each block's root body (SoftFindBlocks), in slot order
     int blockBodyCount
@@ -3805,14 +3807,23 @@ cdef inline void SoftIntegratePosition(SoftContext *ctx, int i) noexcept nogil:
 
 cdef void SoftFinishBodies(SoftContext *ctx, const int *order, int begin, int end) noexcept nogil:
     # Bodies begin to end (or order[begin:end], a group's, where order is
-    # not NULL) written back.
+    # not NULL) written back, and counted, with those left non-finite: the
+    # step's check for an overflow then need not read every body again
+    # (cpSoftStep's answer).
     cdef int i
+    cdef long nonFinite = 0
+    cdef cpBody *body
     for i in range(begin, end):
         if ctx.fetchAhead and i + SOFT_BODY_PREFETCH < end:
             SoftFetchLines(ctx.bodies[SoftNth(order, i + SOFT_BODY_PREFETCH)].body, sizeof(cpBody))
-        SoftFinishBody(ctx, SoftNth(order, i))
+        body = SoftFinishBody(ctx, SoftNth(order, i))
+        if _bodyNonFinite(body):
+            nonFinite += 1
+    tamias_add(&ctx.bodiesFinished, end - begin)
+    if nonFinite:
+        tamias_add(&ctx.bodiesNonFinite, nonFinite)
 
-cdef inline void SoftFinishBody(SoftContext *ctx, int i) noexcept nogil:
+cdef inline cpBody *SoftFinishBody(SoftContext *ctx, int i) noexcept nogil:
     cdef SoftBody *sb = &ctx.bodies[i]
     cdef SoftState *st = &ctx.states[i]
     cdef cpBody *body = sb.body
@@ -3829,6 +3840,7 @@ cdef inline void SoftFinishBody(SoftContext *ctx, int i) noexcept nogil:
         body.f = cpv(0.0, 0.0)
         body.t = 0.0
     SoftSetTransform(body)
+    return body
 
 
 # -- threads within one step ---------------------------------------------------------
@@ -4114,13 +4126,16 @@ cdef void SoftSetSubsteps(SoftContext *ctx, cpFloat dt, int substeps) noexcept n
         hertz = 0.25 * ctx.inv_h
     ctx.jointSoft = SoftMakeSoft(hertz, space.soft.jointDampingRatio, ctx.h)
 
-cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
+cdef bint cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
+    # True when every awake body was written back by the step, none of them
+    # non-finite: only the bodies it does not write can still be (see
+    # tamias_first_non_finite_body).
     cdef SoftContext ctx
     cdef cpFloat prev_dt
     cdef int collided, k, r
     cdef bint ready
     if dt == 0.0:
-        return
+        return 0
     space.stamp += 1
     space.arbitersStamped = 0
     prev_dt = space.curr_dt
@@ -4149,6 +4164,8 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     ctx.loadEstimates = NULL
     ctx.estimatePending = 0
     ctx.colored = 0
+    tamias_store(&ctx.bodiesFinished, 0)
+    tamias_store(&ctx.bodiesNonFinite, 0)
     space.collideMargin = SoftSpeculative(space)
 
     SoftProfileMark(-1)
@@ -4232,9 +4249,14 @@ cdef void cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     if ctx.threaded:
         SoftPoolRelease()
         ctx.threaded = 0
+    # (Checked before the post-solve and post-step callbacks, which may add
+    # bodies: made from Python, whose setters take finite numbers only.)
+    ready = (ready and tamias_load(&ctx.bodiesNonFinite) == 0
+             and tamias_load(&ctx.bodiesFinished) == space.dynamicBodies.num)
     StagePostSolve(space)
     cpSpaceUnlock(space, 1)
     SoftProfileMark(SOFT_STAGE_FINISH)
+    return ready
 
 
 # -- test switches -------------------------------------------------------------------------

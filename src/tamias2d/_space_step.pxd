@@ -211,6 +211,7 @@ cdef cpBody *_firstNonFiniteBody(cpArray *bodies) noexcept nogil
 # The first non-finite body among all a step can change but orphans (see the
 # definition); NULL if none.
 cdef cpBody *tamias_first_non_finite_body(cpSpace *space) noexcept nogil
+cdef cpBody *tamias_first_non_finite_unawake(cpSpace *space) noexcept nogil
 # After a step that overflowed, drop the non-finite warm-start impulses.
 cdef void _forgetNonFiniteImpulses(cpSpace *space) noexcept nogil
 

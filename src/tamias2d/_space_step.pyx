@@ -1048,11 +1048,18 @@ cdef cpBody *tamias_first_non_finite_body(cpSpace *space) noexcept nogil:
     # the Python side (Space._check_bodies), which knows when there may be
     # some. The static array is short and the joints cost two pointer tests.
     cdef cpBody *body = _firstNonFiniteBody(space.dynamicBodies)
-    cdef cpConstraint *c
-    cdef int i
     if body != NULL:
         return body
-    body = _firstNonFiniteBody(space.staticBodies)
+    return tamias_first_non_finite_unawake(space)
+
+
+cdef cpBody *tamias_first_non_finite_unawake(cpSpace *space) noexcept nogil:
+    # tamias_first_non_finite_body without the awake array: what is left to
+    # check after a soft step that found every awake body finite as it wrote
+    # it back (cpSoftStep).
+    cdef cpBody *body = _firstNonFiniteBody(space.staticBodies)
+    cdef cpConstraint *c
+    cdef int i
     if body != NULL:
         return body
     for i in range(space.constraints.num):

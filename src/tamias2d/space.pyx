@@ -88,7 +88,8 @@ from tamias2d._private cimport (cpConstraintNext, cpSpaceArrayForBodyType,
     cpCallHandlers, PHASE_SEPARATE, cpSpaceArbiterLeavesCache)
 from tamias2d._space_step cimport (cpSpaceLock, cpSpaceUnlock, cpSpaceGetPostStepCallback,
     cpSpaceAddPostStepCallback, cpSpaceStep, cpShapeUpdateFunc, cpSpaceWakeComponent, _bodyNonFinite,
-    _firstNonFiniteBody, tamias_first_non_finite_body, _forgetNonFiniteImpulses, OrphanScan,
+    _firstNonFiniteBody, tamias_first_non_finite_body, tamias_first_non_finite_unawake,
+    _forgetNonFiniteImpulses, OrphanScan,
     _scanOrphans)
 from tamias2d._soft_step cimport (cpSoftStep, SoftSettingsInit, SoftScratchFree, SoftPushOut,
     SoftSpeculative, SoftPoolEnsure)
@@ -639,7 +640,9 @@ cdef void _collectShape(void *obj, void *data) noexcept with gil:
 # non-finite (NULL if none). Runs without the GIL.
 cdef cpBody *tamias_space_step(cpSpace *space, cpFloat dt) noexcept nogil:
     if space.soft.solver == TAMIAS_SOLVER_SOFT:
-        cpSoftStep(space, dt)
+        if cpSoftStep(space, dt):
+            # (It checked the awake bodies as it wrote them back.)
+            return tamias_first_non_finite_unawake(space)
     else:
         cpSpaceStep(space, dt)
     return tamias_first_non_finite_body(space)
