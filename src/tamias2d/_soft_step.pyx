@@ -3878,6 +3878,13 @@ cdef enum:
     SOFT_CHUNK_BODIES = 128
     SOFT_WORKER_SPIN = 1 << 16    # pauses a worker polls for the next stage before it sleeps
     SOFT_THREADED_MIN_CONTACTS = 2048   # last step's arbiters
+    # A colour's contact pass with fewer lanes runs on the calling thread:
+    # its bodies' states would cross between the cores' caches for each
+    # colour, for little work. (The tumbler's colours, a pile of 2,025
+    # boxes in a drum, are all under it: on two threads its step took
+    # 5.1-5.4 ms with them shared, 4.8 without, as on one thread; the large
+    # pyramid's and many_pyramids' steps did not change.)
+    SOFT_SHARED_PASS_MIN_LANES = 256
     SOFT_CHUNK_CONTACTS = 64      # contacts counted or stored per chunk
     SOFT_CHUNK_PAIRS = 64         # pairs of the narrow phase per chunk
 
@@ -3990,6 +3997,12 @@ cdef void SoftRun(SoftContext *ctx, int task, int begin, int end, bint flag) noe
         SoftRunRange(ctx, task, begin, end, flag)
         return
     if not ctx.threaded or end - begin <= chunk:
+        SoftRunRange(ctx, task, begin, end, flag)
+        return
+    if (task == SOFT_TASK_WARM_START or task == SOFT_TASK_SOLVE or task == SOFT_TASK_RELAX_ACCUMULATE) \
+            and end - begin < SOFT_SHARED_PASS_MIN_LANES and _threaded_min_contacts > 0:
+        # (Not in the tests' mode, _threaded_min_contacts_set(0), which
+        # shares every stage it can.)
         SoftRunRange(ctx, task, begin, end, flag)
         return
     _pool.ctx = ctx
@@ -4416,7 +4429,8 @@ def _grouped_steps_count():
 def _threaded_min_contacts_set(count=None):
     """The fewest arbiters (last step's) a threaded space's soft step needs
     to use its second thread (and, given `count`, set it first: 0 runs every
-    step of a threaded space on the pool, for tests and the fuzzer's
+    step of a threaded space on the pool, and every stage of it that can be
+    cut in two, however few its lanes, for tests and the fuzzer's
     --threads). Returns the value before."""
     global _threaded_min_contacts
     before = _threaded_min_contacts
