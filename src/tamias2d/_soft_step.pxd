@@ -7,6 +7,9 @@
 # space, see "threads within one step" in _soft_step.pyx):
 #   SoftResetArbiters       StageResetArbiters (shared), or last step's
 #                           arbiters left threaded on their bodies
+#   SoftKeysMayBeCounted    on one thread, without handlers, sleeping off:
+#                           SoftGatherBodies here, and the count in the
+#                           narrow phase (SoftKeyAccepted) instead of below
 #   SoftCollide             broad phase lists the pairs (speculative margin;
 #                           or the last walk's, kept); * cheap rejection,
 #                           narrow phase and the lookup of cached arbiters;
@@ -35,8 +38,8 @@
 #                              the last adds the impulses to the step's totals
 #   * SoftUnpackLanes, SoftApplyRestitution, * SoftStoreImpulses (without
 #   restitution: * SoftUnpackLanes straight into the arbiters),
-#   * SoftFinishBodies (velocities, positions, transforms to the cpBodies),
-#   SoftFinishJoints
+#   * SoftFinishBodies (velocities, positions, transforms to the cpBodies;
+#   each checked for non-finite numbers), SoftFinishJoints
 #   StagePostSolve, unlock (post-step callbacks)            (shared)
 from tamias2d._config cimport cpFloat, cpBool
 from tamias2d._structs cimport (cpSpace, cpBody, cpArbiter, cpContact, cpSoftSettings, cpSoftScratch,
