@@ -351,7 +351,8 @@ cdef enum:
     SOFT_STAGE_NARROW_PHASE       # contacts of each pair, cached arbiters found
     SOFT_STAGE_ARBITERS           # arbiters updated or made, begin / pre_solve
     SOFT_STAGE_COMPONENTS         # contact graph, sleeping, the arbiter cache's filter
-    SOFT_STAGE_PREPARE            # bodies, joints and contacts gathered; contacts prepared into lanes
+    SOFT_STAGE_PREPARE            # last step's arbiters reset; bodies, joints and contacts gathered;
+                                  # contacts prepared into lanes
     SOFT_STAGE_COLOR              # the constraint graph's colours (which lane slot each contact takes),
                                   # and the load estimate where it runs beside them
     SOFT_STAGE_INTEGRATE          # velocities and positions, every substep
