@@ -768,7 +768,6 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     collector.complete = 1
     collector.grow = SoftGrowPairs
     collector.data = space
-    ctx.updateInNarrow = not cpSpaceHasHandlers(space, 1, 1, 0, 0)
     # The last walk of the tree's pairs is kept: while no leaf leaves its
     # box and nothing is added or removed, the next steps take their pairs
     # from there.
@@ -971,7 +970,7 @@ cdef void SoftResetArbiters(SoftContext *ctx) noexcept nogil:
     # Anything that wakes or sleeps a body or drops an arbiter from here on
     # resets it (see SoftProcessComponents).
     space.softScratch.threadsClean = space.stamp
-    if (_keep_threads and space.collisionPersistence > 0 and not cpSpaceHasHandlers(space, 1, 1, 0, 0)
+    if (_keep_threads and space.collisionPersistence > 0 and ctx.updateInNarrow
             and (not sleep or (ctx.threadsEmptied and clean))):
         saved = <void **>_reserve(space, SOFT_SCRATCH_THREADED, arbiters.num, sizeof(void *))
         if saved != NULL:
@@ -1827,7 +1826,7 @@ cdef bint SoftKeysMayBeCounted(SoftContext *ctx) noexcept nogil:
     # step's arbiters after the narrow phase: the count skips them.)
     if not (_count_in_narrow and not ctx.threaded and space.sleepTimeThreshold == INFINITY
             and space.sleepingComponents.num == 0 and space.collisionPersistence > 0
-            and not cpSpaceHasHandlers(space, 1, 1, 0, 1)):
+            and ctx.updateInNarrow and not cpSpaceHasHandlers(space, 0, 0, 0, 1)):
         return 0
     return SoftGatherBodies(ctx)
 
@@ -4187,6 +4186,9 @@ cdef bint cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     # whether its passes fetch ahead.)
     ctx.fetchAhead = space.arbiters.num >= _fetch_min_contacts
     ctx.threaded = SoftPoolAcquire(space)
+    # (Looked up once: no Python runs before the narrow phase that could
+    # change the handlers.)
+    ctx.updateInNarrow = not cpSpaceHasHandlers(space, 1, 1, 0, 0)
     SoftResetArbiters(&ctx)
     ctx.keysInNarrow = SoftKeysMayBeCounted(&ctx)
     SoftProfileMark(SOFT_STAGE_PREPARE)
