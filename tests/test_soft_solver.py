@@ -1707,9 +1707,63 @@ def _sleepy_joints():
     return s
 
 
+def _sleepy_islands():
+    # Piles that stay awake for a while beside components that sleep, and
+    # what changes the contact graph without changing the arbiters: a box
+    # turned kinematic and back, a joint added and removed, bodies added
+    # and removed (one leaving its shape behind), a box slept by hand on a
+    # pile and woken, and a box carried by a kinematic platform (which
+    # keeps it awake at every step).
+    s = _sleepy_space(600)
+    s.sleep_time_threshold = 1.0
+
+    def box(x, y, mass=1.0):
+        b = tamias2d.Body(mass, tamias2d.moment_for_box(mass, (20, 20)))
+        b.position = x, y
+        shape = tamias2d.Poly.create_box(b, (20, 20))
+        shape.friction = 0.8
+        s.add(b, shape)
+        return b
+    left = [box(-400, 10 + 20 * k) for k in range(4)]
+    right = [box(-100, 10 + 20 * k) for k in range(3)]
+    lone = box(300, 10)
+    platform = tamias2d.Body(body_type=tamias2d.Body.KINEMATIC)
+    platform.position = 450, 40
+    platform.velocity = 1, 0
+    s.add(platform, tamias2d.Poly.create_box(platform, (80, 10)))
+    box(450, 56)
+    joint = tamias2d.PinJoint(left[0], right[0])
+
+    def hook(i):
+        if i == 30:
+            left[2].body_type = tamias2d.Body.KINEMATIC
+        elif i == 33:
+            left[2].body_type = tamias2d.Body.DYNAMIC
+            left[2].mass = 1.0
+            left[2].moment = tamias2d.moment_for_box(1.0, (20, 20))
+        elif i == 40:
+            s.add(joint)
+        elif i == 50:
+            s.remove(joint)
+        elif i == 60:
+            right[2].sleep()
+        elif i == 64:
+            right[2].activate()
+        elif i == 70:
+            box(-250, 10)
+        elif i == 75:
+            s.remove(lone)
+        elif i == 80:
+            s.remove(left[3], *left[3].shapes)
+        elif i == 150:
+            box(-100, 200)
+    s.scene_hook = hook
+    return s
+
+
 # The scenes the same-bits tests below run with a switch off and on.
 _SWITCH_SCENES = {"sleepy_pile": _sleepy_pile, "sleepy_pyramid": _sleepy_pyramid,
-                  "sleepy_joints": _sleepy_joints,
+                  "sleepy_joints": _sleepy_joints, "sleepy_islands": _sleepy_islands,
                   "static_changes": _static_changes,
                   "rain_persistence_1": lambda: _short_memory_rain(1),
                   "rain_persistence_0": lambda: _short_memory_rain(0),
@@ -1982,15 +2036,19 @@ _SWITCH_SCENES["post_solve_kicks"] = lambda: _kicking_piles("post_solve")
 
 @pytest.mark.parametrize("scene", ["pyramid", "separate_piles", "disturbed_pile", "kinematic_floor",
                                    "add_remove", "type_changes", "static_changes", "heavy_on_lights",
-                                   "rain_persistence_1", "persistence_toggled", "post_solve_kicks"])
+                                   "rain_persistence_1", "persistence_toggled", "post_solve_kicks",
+                                   "sleepy_pile", "sleepy_pyramid", "sleepy_joints",
+                                   "sleepy_islands", "sleepy_persistence_toggled"])
 def test_keys_counted_in_the_narrow_phase_change_nothing(scene):
-    # On one thread, with no handler acting before the solve and sleeping
-    # off, the bodies are gathered before the narrow phase and each
+    # On one thread, with no handler acting before the solve, the bodies
+    # are gathered before the narrow phase and each
     # arbiter's colouring key is found as the narrow phase accepts it: the
     # same keys, so the same bits, as the count's own pass. (At collision
     # persistence 0, which `persistence_toggled` switches to and from, the
     # cache's filter empties the step's arbiters after the narrow phase:
-    # those steps count in the pass.)
+    # those steps count in the pass. With sleeping on, a step whose
+    # components stage wakes a body or puts one to sleep counts in the pass
+    # too: the slots moved.)
     from tamias2d import _soft_step
     _assert_switch_changes_nothing(_switch_scene(scene), _soft_step._count_keys_in_narrow,
                                    _soft_step._narrow_counts_count,
@@ -2152,6 +2210,67 @@ def test_arbiters_left_threaded_change_nothing(scene):
         assert kept > 0, "no step kept its threads: nothing tested"
     assert lists == lists_munk2d
     assert repr(bodies) == repr(bodies_munk2d)
+
+
+def _sleep_run(build, steps=240):
+    # Which bodies sleep at each step, each step's contact graph checked,
+    # and where the bodies end up.
+    s = build()
+    s.solver = "soft"
+    hook = getattr(s, "scene_hook", None)
+    asleep = []
+    for i in range(steps):
+        if hook is not None:
+            hook(i)
+        s.step(DT)
+        problem = s._contact_graph_problem()
+        assert problem is None, f"step {i}: {problem}"
+        asleep.append(tuple(b.is_sleeping for b in s.bodies))
+    return asleep, repr([(tuple(b.position), b.angle, tuple(b.velocity)) for b in s.bodies])
+
+
+@pytest.mark.parametrize("scene", ["sleepy_pile", "sleepy_pyramid", "sleepy_joints",
+                                   "sleepy_islands"])
+def test_kept_islands_change_nothing(scene):
+    # With sleeping on, a soft step whose contact graph is the last step's
+    # (the same arbiters, bodies, kinds and joints) keeps the last step's
+    # components and skips the union-find: the same bodies must fall asleep
+    # at the same steps, with the same bits, as with the union-find every
+    # step and as with Munk2D's flood fill every step.
+    from tamias2d import _soft_step
+    build = _switch_scene(scene)
+    (asleep_found, bodies_found), (asleep, bodies), kept = _off_and_on(
+        _soft_step._keep_sleeping_islands, _soft_step._kept_islands_count,
+        lambda: _sleep_run(build, 300))
+    assert kept > 0, "no step kept its islands: nothing tested"
+    assert any(any(step) for step in asleep), "nothing fell asleep: nothing tested"
+    assert asleep == asleep_found
+    assert bodies == bodies_found
+    _soft_step._link_sleeping_components(False)
+    try:
+        assert _sleep_run(build, 300) == (asleep, bodies)
+    finally:
+        _soft_step._link_sleeping_components(True)
+
+
+def test_components_asleep_elsewhere_keep_the_shortcut():
+    # A pile stays awake while another component sleeps far from it: its
+    # steps skip the flood fill (the union-find or the kept islands) once
+    # the graph is clean, as with nothing asleep.
+    from tamias2d import _soft_step
+    s = _sleepy_islands()
+    s.solver = "soft"
+    for i in range(141):
+        s.scene_hook(i)
+        s.step(DT)
+    asleep = [b.is_sleeping for b in s.bodies]
+    assert 0 < sum(asleep) < len(asleep) - 1
+    linked, kept = _soft_step._linked_components_count(), _soft_step._kept_islands_count()
+    for _ in range(8):
+        s.step(DT)
+    assert [b.is_sleeping for b in s.bodies] == asleep
+    assert _soft_step._linked_components_count() - linked == 8
+    assert _soft_step._kept_islands_count() - kept == 8
 
 
 @pytest.mark.parametrize("scene", ["sleepy_pile", "sleepy_pyramid", "sleepy_joints"])

@@ -159,9 +159,13 @@ cdef enum:
     SOFT_SCRATCH_LOADS        # the piles' loads from their weights (SoftEstimateLoads)
     SOFT_SCRATCH_GROUPS       # the contact groups solved one after the other (SoftFindGroups)
     SOFT_SCRATCH_OLD_KEYS     # the colouring keys last coloured (SoftKeepColors)
+    SOFT_SCRATCH_ISLANDS      # the components kept between steps (cpSpaceProcessComponents)
     SOFT_SCRATCH_COUNT
 
-# (cpSoftScratch holds 25 buffers.)
+# cpSoftScratch's arrays must have room for them all (checked on import).
+cdef cpSoftScratch _scratch_probe
+if SOFT_SCRATCH_COUNT > sizeof(_scratch_probe.buf) // sizeof(void *):
+    raise ImportError("cpSoftScratch (_structs.pxd) has fewer buffers than SOFT_SCRATCH_COUNT")
 
 cdef void *_reserve(cpSpace *space, int which, int need, size_t size) noexcept nogil:
     # Room for `need` elements of `size` bytes in scratch buffer `which`, or
@@ -297,7 +301,7 @@ cdef struct SoftContext:
     int *blockNext            # per contact: the next one of its block
     SoftBlockCache *blockCache    # per block (blockBodies' order), built by its first pass
     int threadedCount         # last step's arbiters left threaded (-1: unthreaded as Munk2D)
-    bint threadsEmptied       # sleeping on, nothing asleep: the reset left no arbiter threaded
+    bint threadsEmptied       # sleeping on, and the reset left no arbiter threaded
     bint threaded             # stages may run on the pool (SoftRun)
     bint serialVelocities     # a body has its own velocity_func (Python: one thread)
     bint serialPositions      # a body has its own position_func
@@ -446,6 +450,9 @@ cdef volatile long _kept_threads = 0
 # The same for the components found by union-find instead of the flood fill
 # (SoftProcessComponents).
 cdef bint _link_components = 1
+# ... and the components kept from the last step instead of the union-find.
+cdef bint _keep_islands = 1
+cdef volatile long _kept_islands = 0
 # SoftEstimateLoads (off only in tests and benchmarks, which compare).
 cdef bint _estimate_loads = 1
 cdef volatile long _linked_components = 0
@@ -966,12 +973,11 @@ cdef void SoftResetArbiters(SoftContext *ctx) noexcept nogil:
     cdef bint sleep = space.sleepTimeThreshold != INFINITY
     cdef bint clean = space.softScratch.threadsClean + 1 == space.stamp
     ctx.threadedCount = -1
-    ctx.threadsEmptied = sleep and space.sleepingComponents.num == 0
     # Anything that wakes or sleeps a body or drops an arbiter from here on
     # resets it (see SoftProcessComponents).
     space.softScratch.threadsClean = space.stamp
     if (_keep_threads and space.collisionPersistence > 0 and ctx.updateInNarrow
-            and (not sleep or (ctx.threadsEmptied and clean))):
+            and (not sleep or clean)):
         saved = <void **>_reserve(space, SOFT_SCRATCH_THREADED, arbiters.num, sizeof(void *))
         if saved != NULL:
             tamias_store(&ctx.uncachedArbiter, 0)
@@ -980,10 +986,17 @@ cdef void SoftResetArbiters(SoftContext *ctx) noexcept nogil:
                 memcpy(saved, arbiters.arr, arbiters.num * sizeof(void *))
                 ctx.threadedCount = arbiters.num
                 arbiters.num = 0
+                # (After a clean step no arbiter has a sleeping body: one
+                # touched would have been woken, and waking or sleeping
+                # since would have cleared the mark.)
+                ctx.threadsEmptied = sleep
                 return
             # (Some were reset before the pooled one was found: NORMAL, as
             # the full reset below makes them.)
-    StageResetArbiters(space)
+    # Munk2D's reset leaves threaded the arbiters that have a sleeping body:
+    # with none, the lists will hold this step's arrays alone, whether or
+    # not components sleep elsewhere.
+    ctx.threadsEmptied = StageResetArbiters(space) == 0 and sleep
 
 cdef void SoftMarkThreaded(SoftContext *ctx, int begin, int end) noexcept nogil:
     # Last step's arbiters [begin, end), kept threaded: their state reset as
@@ -1064,14 +1077,26 @@ cdef void SoftProcessComponents(SoftContext *ctx, cpFloat dt, int collided) noex
     # sleep in between resets the mark (cpSpaceActivateBody and the like).
     cdef cpSpace *space = ctx.space
     cdef int *links = NULL
+    cdef int *islands = NULL
+    cdef int skipped
     # (At a threshold <= 0 the flood fill always runs: _holdAwakeTouching.)
     if ctx.threadsEmptied and _link_components and space.sleepTimeThreshold > 0.0:
         links = <int *>_reserve(space, SOFT_SCRATCH_COMPONENTS, 2 * space.dynamicBodies.num + 2,
                                 sizeof(int))
-    if cpSpaceProcessComponents(space, dt, collided, SoftRethreadArbiters(ctx, collided), links):
+        if links != NULL and _keep_islands:
+            islands = <int *>_reserve(space, SOFT_SCRATCH_ISLANDS,
+                                      3 * space.dynamicBodies.num + 3, sizeof(int))
+    skipped = cpSpaceProcessComponents(space, dt, collided, SoftRethreadArbiters(ctx, collided),
+                                       links, islands)
+    if skipped:
         tamias_add(&_linked_components, 1)
+    if skipped == 2:
+        tamias_add(&_kept_islands, 1)
+    # (Components that were asleep before the step may stay asleep: their
+    # arbiters are not in the array, and none of this step's touches them.
+    # One put to sleep here has cleared the mark.)
     if not (ctx.threadsEmptied and space.softScratch.threadsClean == space.stamp
-            and space.sleepingComponents.num == 0 and space.arbiters.num == collided):
+            and space.arbiters.num == collided):
         space.softScratch.threadsClean = 0
 
 
@@ -1823,9 +1848,11 @@ cdef bint SoftKeysMayBeCounted(SoftContext *ctx) noexcept nogil:
     # bodies are gathered now.
     cdef cpSpace *space = ctx.space
     # (At collision persistence 0 the arbiter cache's filter empties this
-    # step's arbiters after the narrow phase: the count skips them.)
-    if not (_count_in_narrow and not ctx.threaded and space.sleepTimeThreshold == INFINITY
-            and space.sleepingComponents.num == 0 and space.collisionPersistence > 0
+    # step's arbiters after the narrow phase: the count skips them. With
+    # sleeping on, the components stage between may wake a body or put one
+    # to sleep, which moves the slots: SoftKeysHold then refuses the keys.)
+    if not (_count_in_narrow and not ctx.threaded and space.collisionPersistence > 0
+            and (space.sleepTimeThreshold != INFINITY or space.sleepingComponents.num == 0)
             and ctx.updateInNarrow and not cpSpaceHasHandlers(space, 0, 0, 0, 1)):
         return 0
     return SoftGatherBodies(ctx)
@@ -1856,9 +1883,14 @@ cdef void SoftKeyAccepted(SoftContext *ctx, int n) noexcept nogil:
 
 cdef inline bint SoftKeysHold(SoftContext *ctx) noexcept nogil:
     # The keys counted in the narrow phase are the step's: they cover its
-    # arbiters, and its bodies are the ones gathered.
-    return (ctx.keysInNarrow and ctx.keyed == ctx.space.arbiters.num
-            and ctx.bodyCount == ctx.space.dynamicBodies.num + 1)
+    # arbiters, and its bodies are the ones gathered. (With sleeping on, no
+    # body woke or fell asleep since the step began: anything that does
+    # clears cpSoftScratch.threadsClean, which SoftResetArbiters set.)
+    cdef cpSpace *space = ctx.space
+    return (ctx.keysInNarrow and ctx.keyed == space.arbiters.num
+            and ctx.bodyCount == space.dynamicBodies.num + 1
+            and (space.sleepTimeThreshold == INFINITY
+                 or space.softScratch.threadsClean == space.stamp))
 
 cdef inline cpVect SoftSlotPosition(SoftContext *ctx, int slot, const cpBody *body) noexcept nogil:
     # A body's position as gathered (slot 0's from the body: static or
@@ -4453,6 +4485,21 @@ def _link_sleeping_components(on=None):
 def _linked_components_count():
     """Steps so far (all spaces) that skipped the flood fill."""
     return tamias_load(&_linked_components)
+
+def _keep_sleeping_islands(on=None):
+    """Whether a soft step with sleeping on may keep the last step's
+    components where its contact graph is the same, instead of the
+    union-find (and, given `on`, set it first; for tests, which check that
+    it changes nothing)."""
+    global _keep_islands
+    if on is not None:
+        _keep_islands = bool(on)
+    return bool(_keep_islands)
+
+def _kept_islands_count():
+    """Steps so far (all spaces) whose kept components skipped the flood
+    fill and the union-find."""
+    return tamias_load(&_kept_islands)
 
 def _chain_preload_tilt(share=None):
     """How much of the difference between a two-point chain contact's point

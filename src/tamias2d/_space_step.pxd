@@ -3,7 +3,8 @@
 # cpSpace.c, is in space.pxd; the queries are in _space_query.pxd.
 #
 # cpSpaceStep is a pipeline of the stages below, in this order:
-#   StageResetArbiters       last step's arbiters: normal again, unthreaded
+#   StageResetArbiters       last step's arbiters: normal again, unthreaded (but
+#                            those with a sleeping body: counted)
 #   StageIntegratePositions  body.position_func of every awake body
 #   StageCollide             broad phase -> cpSpaceCollideShapes (narrow phase,
 #                            arbiter cache, begin / pre-solve callbacks)
@@ -66,7 +67,7 @@ cdef inline cpContact *cpContactBufferRoom(cpSpace *space) noexcept nogil:
 
 # -- the step and its stages --------------------------------------------------------------
 cdef void cpSpaceStep(cpSpace *space, cpFloat dt) noexcept nogil
-cdef void StageResetArbiters(cpSpace *space) noexcept nogil
+cdef int StageResetArbiters(cpSpace *space) noexcept nogil
 cdef void StageIntegratePositions(cpSpace *space, cpFloat dt) noexcept nogil
 cdef void StageCollide(cpSpace *space) noexcept nogil
 cdef void StageFilterArbiterCache(cpSpace *space) noexcept nogil
@@ -189,8 +190,8 @@ cdef void cpSpaceWakeComponent(cpSpace *space, cpBody *root) noexcept nogil
 # space.dynamicBodies.num + 2 ints) lets it skip the flood fill where it
 # can tell that no component would sleep (the soft step; it overwrites the
 # bodies' solverIndex), and returns whether it did.
-cdef bint cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count, bint threaded,
-                                   int *links) noexcept nogil
+cdef int cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count, bint threaded,
+                                  int *links, int *islands) noexcept nogil
 
 # A dynamic body removed from the space while its shapes stayed (pymunk
 # allows it). The space no longer integrates it, so, like a kinematic body, it

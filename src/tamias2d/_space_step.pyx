@@ -10,7 +10,7 @@ themselves. The world (cpSpace.c) and the ``Space`` class are in
 arbiter in ``arbiter.pyx`` and the joints' in ``constraints.pyx``.
 """
 from libc.math cimport INFINITY, pow
-from libc.string cimport memcpy
+from libc.string cimport memcpy, memset
 
 from tamias2d._config cimport (cpFloat, cpBool, cpHashValue, cpCollisionID, cpTimestamp,
     CP_HASH_PAIR, CP_MAX_CONTACTS_PER_ARBITER, CP_BUFFER_BYTES, tamias_prefetch)
@@ -330,7 +330,7 @@ cdef void cpSpaceStep(cpSpace *space, cpFloat dt) noexcept nogil:
     collided = space.arbiters.num
     cpSpaceUnlock(space, 0)
 
-    cpSpaceProcessComponents(space, dt, collided, 0, NULL)
+    cpSpaceProcessComponents(space, dt, collided, 0, NULL, NULL)
 
     cpSpaceLock(space)
     StageFilterArbiterCache(space)
@@ -344,16 +344,21 @@ cdef void cpSpaceStep(cpSpace *space, cpFloat dt) noexcept nogil:
 
 # Last step's arbiters go back to normal; those between awake bodies are
 # taken out of the contact graph (the components stage threads them again).
-cdef void StageResetArbiters(cpSpace *space) noexcept nogil:
+cdef int StageResetArbiters(cpSpace *space) noexcept nogil:
+    # Returns how many stay threaded, having a sleeping body (the soft
+    # step's union-find of the components needs none: SoftResetArbiters).
     cdef cpArray *arbiters = space.arbiters
     cdef cpArbiter *arb
-    cdef int i
+    cdef int i, kept = 0
     for i in range(arbiters.num):
         arb = <cpArbiter *>arbiters.arr[i]
         arb.state = CP_ARBITER_STATE_NORMAL
         if not cpBodyIsSleeping(arb.body_a) and not cpBodyIsSleeping(arb.body_b):
             cpArbiterUnthread(arb)
+        else:
+            kept += 1
     arbiters.num = 0
+    return kept
 
 cdef void StageIntegratePositions(cpSpace *space, cpFloat dt) noexcept nogil:
     cdef cpArray *bodies = space.dynamicBodies
@@ -507,6 +512,7 @@ cdef void cpSpaceActivateBody(cpSpace *space, cpBody *body) noexcept nogil:
     # (Its arbiters join the step's array, threaded: the lists are no longer
     # the array's alone.)
     space.softScratch.threadsClean = 0
+    space.softScratch.islandsStamp = 0
 
     shape = body.shapeList
     while shape != NULL:
@@ -562,6 +568,7 @@ cdef void cpSpaceDeactivateBody(cpSpace *space, cpBody *body) noexcept nogil:
 
     cpArrayDeleteObj(space.dynamicBodies, body)
     space.softScratch.threadsClean = 0
+    space.softScratch.islandsStamp = 0
 
     shape = body.shapeList
     while shape != NULL:
@@ -785,8 +792,70 @@ cdef bint _everyComponentActive(cpSpace *space, int *parent, int n) noexcept nog
             return 0
     return 1
 
-cdef bint cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count, bint threaded,
-                                   int *links) noexcept nogil:
+# The soft step's persistent islands: the components of the last union-find
+# that found every one active, kept for the next step in `islands` (3 n + 3
+# ints for n dynamic bodies): each slot's root (0: not dynamic), then the
+# roots, then the slots that the arbiters' pass activated (a dynamic body
+# touching a kinematic or orphan one) in order. A step whose arbiter array
+# is the last step's (its threads kept: SoftRethreadArbiters), with the same
+# bodies and joints and nothing woken or put to sleep, has the same graph:
+# it marks the roots of the bodies that are not idle as it updates the idle
+# times, activates those slots again, and asks only whether every root is
+# marked, without reading the arbiters. Any other step does the union-find
+# and may keep its result.
+
+cdef inline void _markIsland(cpSpace *space, const int *islands, int *restless,
+                             const cpBody *body, int n) noexcept nogil:
+    # After an activation: the body's component is not idle.
+    cdef int i = _linkSlot(space, body, n)
+    if i != 0:
+        restless[islands[i]] = 1
+
+cdef inline bint _recordWake(cpSpace *space, int *islands, int *wakes, const cpBody *body,
+                             int n) noexcept nogil:
+    # The arbiters' pass activated body (no change unless dynamic): noted
+    # for the next step, 0 where it cannot be (no slot, or the list full).
+    cdef int i
+    if cpBodyGetType(body) != CP_BODY_TYPE_DYNAMIC:
+        return 1
+    i = _linkSlot(space, body, n)
+    if i == 0 or wakes[0] > n:
+        return 0
+    islands[2 * (n + 1) + wakes[0]] = i
+    wakes[0] += 1
+    return 1
+
+cdef void _keepIslands(cpSpace *space, int *parent, int *islands, int n, int wakes) noexcept nogil:
+    # The union-find's components (every one active) kept for the next step.
+    cdef int *roots = islands + n + 1
+    cdef int i, count = 0
+    islands[0] = 0
+    for i in range(1, n + 1):
+        if cpBodyGetType(<cpBody *>space.dynamicBodies.arr[i - 1]) != CP_BODY_TYPE_DYNAMIC:
+            islands[i] = 0
+        else:
+            islands[i] = _linkRoot(parent, i)
+            if islands[i] == i:
+                roots[count] = i
+                count += 1
+    space.softScratch.islandCount = count
+    space.softScratch.islandWakes = wakes
+    space.softScratch.islandBodies = n
+    space.softScratch.islandsStamp = space.stamp
+
+cdef inline bint _islandsActive(cpSpace *space, const int *islands, const int *restless,
+                                int n) noexcept nogil:
+    cdef const int *roots = islands + n + 1
+    cdef int k
+    for k in range(space.softScratch.islandCount):
+        if not restless[roots[k]]:
+            return 0
+    return 1
+
+cdef int cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count, bint threaded,
+                                  int *links, int *islands) noexcept nogil:
+    # 1 where the union-find showed that the flood fill would change
+    # nothing, and skipped it; 2 where the kept islands did.
     cdef cpBool sleep = space.sleepTimeThreshold != INFINITY
     cdef cpArray *bodies = space.dynamicBodies
     cdef cpArray *arbiters
@@ -802,6 +871,18 @@ cdef bint cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count, bint t
     cdef cpConstraint *constraint
     # See _holdAwake: only where Munk2D cannot keep a body awake by waking it.
     cdef cpBool holdAwake = sleep and not (space.sleepTimeThreshold > 0.0)
+    # The last step's islands hold (see _keepIslands): with links (no
+    # component asleep that this step's graph could reach) and threads kept.
+    cdef bint persist = (links != NULL and islands != NULL and threaded
+                         and space.softScratch.islandsStamp != 0
+                         and space.softScratch.islandsStamp + 1 == space.stamp
+                         and space.softScratch.islandBodies == bodies.num)
+    cdef int *restless = links + linked + 1 if links != NULL else NULL
+    cdef int wakes = 0
+    cdef bint keep = islands != NULL
+    space.softScratch.islandsStamp = 0
+    if persist:
+        memset(restless, 0, (linked + 1) * sizeof(int))
 
     if sleep:
         dv = space.idleSpeedThreshold
@@ -822,12 +903,20 @@ cdef bint cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count, bint t
             keThreshold = body.m * dvsq if dvsq != 0.0 else 0.0
             body.sleeping.idleTime = (0.0 if cpBodyKineticEnergy(body) > keThreshold
                                       else body.sleeping.idleTime + dt)
+            if persist and body.sleeping.idleTime < space.sleepTimeThreshold:
+                restless[islands[i + 1]] = 1
 
     # Wake sleeping bodies that are touched, and thread the arbiters found
     # this step into their bodies' lists (head insertion, in array order).
     # Arbiters appended from here on, by waking, are threaded already.
     arbiters = space.arbiters
-    if sleep or not threaded:
+    if persist:
+        # The same arbiters, bodies and kinds: the same activations.
+        for i in range(space.softScratch.islandWakes):
+            body = <cpBody *>bodies.arr[islands[2 * (linked + 1) + i] - 1]
+            cpBodyActivate(body)
+            restless[islands[body.solverIndex]] = 1
+    elif sleep or not threaded:
         for i in range(count):
             if sleep and i + 16 < count:
                 # What the waking reads of the arbiters and their bodies,
@@ -844,9 +933,13 @@ cdef bint cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count, bint t
                 if (cpBodyGetType(b) == CP_BODY_TYPE_KINEMATIC or cpBodyIsSleeping(a)
                         or _orphanBody(b, space)):
                     cpBodyActivate(a)
+                    if keep and links != NULL:
+                        keep = _recordWake(space, islands, &wakes, a, linked)
                 if (cpBodyGetType(a) == CP_BODY_TYPE_KINEMATIC or cpBodyIsSleeping(b)
                         or _orphanBody(a, space)):
                     cpBodyActivate(b)
+                    if keep and links != NULL:
+                        keep = _recordWake(space, islands, &wakes, b, linked)
                 if links != NULL and not _linkBodies(space, links, a, b, linked):
                     links = NULL
             if not threaded:
@@ -862,17 +955,28 @@ cdef bint cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count, bint t
             b = constraint.b
             if cpBodyGetType(b) == CP_BODY_TYPE_KINEMATIC:
                 cpBodyActivate(a)
+                if persist:
+                    _markIsland(space, islands, restless, a, linked)
             if cpBodyGetType(a) == CP_BODY_TYPE_KINEMATIC:
                 cpBodyActivate(b)
+                if persist:
+                    _markIsland(space, islands, restless, b, linked)
             i += 1
 
         if holdAwake:
             # After all the waking above, which restarts idle times at 0.
             _holdAwakeTouching(space, count)
+        elif persist and space.softScratch.threadsClean == space.stamp:
+            if _islandsActive(space, islands, restless, linked):
+                space.softScratch.islandsStamp = space.stamp
+                return 2
+            # A component may fall asleep: the flood fill decides.
         elif (links != NULL and space.softScratch.threadsClean == space.stamp
                 and _everyComponentActive(space, links, linked)):
             # Nothing sleeps, nothing woke, and the lists are the array's: the
             # flood fill would find every component active and change nothing.
+            if keep:
+                _keepIslands(space, links, islands, linked, wakes)
             return 1
 
         # Build the components and put the idle ones to sleep.
@@ -938,6 +1042,8 @@ cdef void _hookBodyTypeChanged(cpSpace *space, cpBody *body, cpBodyType oldType,
     cdef cpSpatialIndex *fromIndex
     cdef cpSpatialIndex *toIndex
     cdef cpShape *shape
+    # (A kinematic body joins no component: see _keepIslands.)
+    space.softScratch.islandsStamp = 0
     if fromArray != toArray:
         cpArrayDeleteObj(fromArray, body)
         cpArrayPush(toArray, body)

@@ -397,8 +397,8 @@ cdef struct cpSoftSettings:
 # Per-step scratch of the soft solver, owned by the space (grown, never
 # shrunk; freed by cpSpaceDestroy; never copied).
 cdef struct cpSoftScratch:
-    void *buf[25]                # indexed by _soft_step's SOFT_SCRATCH_* (< 25)
-    int cap[25]                  # elements each buffer has room for
+    void *buf[26]                # indexed by _soft_step's SOFT_SCRATCH_* (< 26)
+    int cap[26]                  # elements each buffer has room for
     # The broad phase's last walk, kept in the SOFT_SCRATCH_PAIRS buffer: its
     # pair count and the dynamic tree's version after it (0: no walk kept).
     int pairCount
@@ -409,6 +409,16 @@ cdef struct cpSoftScratch:
     # Waking, sleeping and dropping arbiters reset it (_space_step.pyx,
     # space.pyx); the next step may then leave those lists as they are.
     cpTimestamp threadsClean
+    # With sleeping on: the awake components that the last union-find found
+    # (the soft step's persistent islands, cpSpaceProcessComponents), kept in
+    # the SOFT_SCRATCH_ISLANDS buffer: the step they hold after (0: none;
+    # adding or removing a body or a joint, and a body's type change, reset
+    # it), the dynamic bodies then, their components and the bodies that
+    # step's contacts with kinematic or orphan bodies kept awake.
+    cpTimestamp islandsStamp
+    int islandBodies
+    int islandCount
+    int islandWakes
     # The soft step's last colouring of its contacts (SoftColorContacts),
     # which the next step takes over when its contacts' colouring keys are
     # those it was made from (kept in a scratch buffer): colorsKnown 0 when

@@ -378,6 +378,8 @@ cdef cpBody *cpSpaceAddBody(cpSpace *space, cpBody *body) noexcept nogil:
     if not cpArrayPush(cpSpaceArrayForBodyType(space, cpBodyGetType(body)), body):
         return NULL
     body.space = space
+    # (The soft step's kept components hold for the bodies they were made of.)
+    space.softScratch.islandsStamp = 0
     return body
 
 cdef struct arbiterFilterContext:
@@ -515,6 +517,7 @@ cdef void cpSpaceRemoveBody(cpSpace *space, cpBody *body) noexcept nogil:
     # Munk2D does not filter the body's arbiters here (only shape removal does).
     cpArrayDeleteObj(cpSpaceArrayForBodyType(space, cpBodyGetType(body)), body)
     body.space = NULL
+    space.softScratch.islandsStamp = 0
 
 # Callers check Munk2D's hard asserts (not in a space, unlocked, both bodies
 # set). NULL when out of memory (nothing changed).
@@ -525,6 +528,7 @@ cdef cpConstraint *cpSpaceAddConstraint(cpSpace *space, cpConstraint *constraint
     cpBodyActivate(b)
     if not cpArrayPush(space.constraints, constraint):
         return NULL
+    space.softScratch.islandsStamp = 0
     # Head insertion into both bodies' lists.
     constraint.next_a = a.constraintList
     a.constraintList = constraint
@@ -538,6 +542,7 @@ cdef void cpSpaceRemoveConstraint(cpSpace *space, cpConstraint *constraint) noex
     cpBodyActivate(constraint.a)
     cpBodyActivate(constraint.b)
     cpArrayDeleteObj(space.constraints, constraint)
+    space.softScratch.islandsStamp = 0
     cpBodyRemoveConstraint(constraint.a, constraint)
     cpBodyRemoveConstraint(constraint.b, constraint)
     constraint.space = NULL
