@@ -2253,6 +2253,32 @@ def test_kept_islands_change_nothing(scene):
         _soft_step._link_sleeping_components(True)
 
 
+@pytest.mark.parametrize("how", ["copy", "pickle"])
+def test_a_copy_continues_alike_without_the_kept_islands(how):
+    # A copy starts with no kept components or threads (scratch is not
+    # copied): its first steps find them again, with the same bits and the
+    # same bodies falling asleep as the original, which keeps its own.
+    from tamias2d import _soft_step
+    s = _sleepy_islands()
+    s.solver = "soft"
+    for i in range(160):
+        s.scene_hook(i)
+        s.step(DT)
+    del s.scene_hook        # (a closure: not picklable; its last change was at step 150)
+    twin = s.copy() if how == "copy" else pickle.loads(pickle.dumps(s))
+    kept = _soft_step._kept_islands_count()
+    asleep, asleep_twin = [], []
+    for _ in range(140):
+        s.step(DT)
+        twin.step(DT)
+        asleep.append([b.is_sleeping for b in s.bodies])
+        asleep_twin.append([b.is_sleeping for b in twin.bodies])
+    assert _soft_step._kept_islands_count() - kept > 100
+    assert any(any(step) for step in asleep) and not all(all(step) for step in asleep)
+    assert asleep_twin == asleep
+    assert hc.state_hash(twin) == hc.state_hash(s)
+
+
 def test_components_asleep_elsewhere_keep_the_shortcut():
     # A pile stays awake while another component sleeps far from it: its
     # steps skip the flood fill (the union-find or the kept islands) once
