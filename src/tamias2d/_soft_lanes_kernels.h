@@ -223,8 +223,10 @@ static SOFT_ALWAYS_INLINE void SOFT_KERNEL(soft_solve)(SoftLanes *c, SoftLaneLin
 static void SOFT_KERNEL(soft_warm_start_range)(SoftLanes *c, int n, SoftState *st, int fetch) {
     int i;
     for (i = 0; i < n; i++) {
-        if (fetch && i + SOFT_FETCH_AHEAD < n)
+        if (fetch && i + SOFT_FETCH_AHEAD < n) {
             soft_fetch_states(&c[i + SOFT_FETCH_AHEAD], st);
+            soft_fetch_lane_for_warm_start(&c[i + 2]);
+        }
         SOFT_KERNEL(soft_warm_start)(&c[i], st);
     }
 }
