@@ -1516,6 +1516,16 @@ def _sleepy_space(half_width):
     return s
 
 
+def _add_sleepy_box(s, x, y, mass=1.0):
+    # A 20x20 box of friction 0.8 at (x, y), added to s.
+    b = tamias2d.Body(mass, tamias2d.moment_for_box(mass, (20, 20)))
+    b.position = x, y
+    shape = tamias2d.Poly.create_box(b, (20, 20))
+    shape.friction = 0.8
+    s.add(b, shape)
+    return b
+
+
 def _sleepy_pile():
     # Boxes that fall asleep, are woken by a late box and fall asleep again:
     # arbiters leave the cache for the sleeping components and come back.
@@ -1683,12 +1693,7 @@ def _sleepy_joints():
     s = _sleepy_space(400)
 
     def box(x, y, mass=1.0):
-        b = tamias2d.Body(mass, tamias2d.moment_for_box(mass, (20, 20)))
-        b.position = x, y
-        shape = tamias2d.Poly.create_box(b, (20, 20))
-        shape.friction = 0.8
-        s.add(b, shape)
-        return b
+        return _add_sleepy_box(s, x, y, mass)
     for i in range(4):
         left, right = box(-300 + 90 * i, 12), box(-270 + 90 * i, 12 + 5 * i)
         s.add(tamias2d.PinJoint(left, right))
@@ -1718,12 +1723,7 @@ def _sleepy_islands():
     s.sleep_time_threshold = 1.0
 
     def box(x, y, mass=1.0):
-        b = tamias2d.Body(mass, tamias2d.moment_for_box(mass, (20, 20)))
-        b.position = x, y
-        shape = tamias2d.Poly.create_box(b, (20, 20))
-        shape.friction = 0.8
-        s.add(b, shape)
-        return b
+        return _add_sleepy_box(s, x, y, mass)
     left = [box(-400, 10 + 20 * k) for k in range(4)]
     right = [box(-100, 10 + 20 * k) for k in range(3)]
     lone = box(300, 10)
