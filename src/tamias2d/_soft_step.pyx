@@ -1072,8 +1072,8 @@ cdef bint SoftRethreadArbiters(SoftContext *ctx, int collided) noexcept nogil:
 
 cdef void SoftProcessComponents(SoftContext *ctx, cpFloat dt, int collided) noexcept nogil:
     # The contact graph stage, and whether its lists end up exactly the
-    # step's array, threaded in order, with nothing asleep: then the next
-    # step may keep them (SoftResetArbiters). Waking or putting a body to
+    # step's array, threaded in order, with no arbiter of a sleeping body
+    # left on them: then the next step may keep them (SoftResetArbiters). Waking or putting a body to
     # sleep in between resets the mark (cpSpaceActivateBody and the like).
     cdef cpSpace *space = ctx.space
     cdef int *links = NULL

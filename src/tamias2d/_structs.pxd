@@ -404,8 +404,9 @@ cdef struct cpSoftScratch:
     int pairCount
     unsigned long long pairsVersion
     # With sleeping on: the stamp of the last soft step after whose contact
-    # graph stage every body's arbiter list held exactly that step's
-    # arbiters, threaded in array order, and nothing slept (0: not known).
+    # graph stage every awake body's arbiter list held exactly that step's
+    # arbiters, threaded in array order, none with a sleeping body, and
+    # nothing woke or slept in it (0: not known).
     # Waking, sleeping and dropping arbiters reset it (_space_step.pyx,
     # space.pyx); the next step may then leave those lists as they are.
     cpTimestamp threadsClean
