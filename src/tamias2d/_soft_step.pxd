@@ -7,9 +7,9 @@
 # space, see "threads within one step" in _soft_step.pyx):
 #   SoftResetArbiters       StageResetArbiters (shared), or last step's
 #                           arbiters left threaded on their bodies
-#   SoftKeysMayBeCounted    on one thread, without handlers, sleeping off:
-#                           SoftGatherBodies here, and the count in the
-#                           narrow phase (SoftKeyAccepted) instead of below
+#   SoftKeysMayBeCounted    on one thread, without handlers: SoftGatherBodies
+#                           here, and the count in the narrow phase
+#                           (SoftKeyAccepted) instead of below
 #   SoftCollide             broad phase lists the pairs (speculative margin;
 #                           or the last walk's, kept); * cheap rejection,
 #                           narrow phase and the lookup of cached arbiters;

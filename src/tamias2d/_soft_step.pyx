@@ -1073,8 +1073,9 @@ cdef bint SoftRethreadArbiters(SoftContext *ctx, int collided) noexcept nogil:
 cdef void SoftProcessComponents(SoftContext *ctx, cpFloat dt, int collided) noexcept nogil:
     # The contact graph stage, and whether its lists end up exactly the
     # step's array, threaded in order, with no arbiter of a sleeping body
-    # left on them: then the next step may keep them (SoftResetArbiters). Waking or putting a body to
-    # sleep in between resets the mark (cpSpaceActivateBody and the like).
+    # left on them: then the next step may keep them (SoftResetArbiters).
+    # Waking or putting a body to sleep in between resets the mark
+    # (cpSpaceActivateBody and the like).
     cdef cpSpace *space = ctx.space
     cdef int *links = NULL
     cdef int *islands = NULL
@@ -1836,7 +1837,8 @@ cdef void SoftCountRange(SoftContext *ctx, int begin, int end) noexcept nogil:
 
 # Counted in the narrow phase. On one thread, where nothing between the
 # narrow phase and the preparation can change a body (no collision handler
-# that runs Python, nothing asleep or put to sleep), the bodies are gathered
+# that runs Python; with sleeping on, nothing woken or put to sleep: checked),
+# the bodies are gathered
 # before the narrow phase, and each arbiter's key is found as the narrow
 # phase accepts it, with the arbiter and its contacts in cache: the count's
 # pass over the arbiters, a cache miss or more each, is not made. The same
@@ -4352,32 +4354,29 @@ def _lanes_path(name=None):
     current = SoftLanesGetPath()
     return next(n for n, p in _LANE_PATHS.items() if p == current)
 
+cdef bint _switch(bint *flag, object on):
+    # A test switch: its value, set first to `on` unless that is None.
+    if on is not None:
+        flag[0] = bool(on)
+    return flag[0]
+
 def _arbiter_guesses(on=None):
     """Whether the narrow phase takes a pair's arbiter from the broad
     phase's memory of it (and, given `on`, set it first; for tests, which
     check that without the guesses every step is the same)."""
-    global _use_guesses
-    if on is not None:
-        _use_guesses = bool(on)
-    return bool(_use_guesses)
+    return _switch(&_use_guesses, on)
 
 def _keep_broad_phase_pairs(on=None):
     """Whether the broad phase takes a step's pairs from its last walk over
     the tree when the tree has not changed since (and, given `on`, set it
     first; for tests, which check that walking every step changes nothing)."""
-    global _keep_pairs
-    if on is not None:
-        _keep_pairs = bool(on)
-    return bool(_keep_pairs)
+    return _switch(&_keep_pairs, on)
 
 def _reuse_last_colors(on=None):
     """Whether a step takes over the last step's colouring of its contacts
     when their colouring keys are the same (and, given `on`, set it first;
     for tests, which check that colouring every step changes nothing)."""
-    global _reuse_colors
-    if on is not None:
-        _reuse_colors = bool(on)
-    return bool(_reuse_colors)
+    return _switch(&_reuse_colors, on)
 
 def _reused_colorings_count():
     """Steps so far (all spaces) that took over the last step's colouring."""
@@ -4387,24 +4386,18 @@ def _skip_leaf_refresh(on=None):
     """Whether the broad phase skips the tree's refresh of its leaves when no
     shape left its leaf's box (and, given `on`, set it first; for tests,
     which check that refreshing every step changes nothing)."""
-    global _skip_refresh
-    if on is not None:
-        _skip_refresh = bool(on)
-    return bool(_skip_refresh)
+    return _switch(&_skip_refresh, on)
 
 def _skipped_refreshes_count():
     """Steps so far (all spaces) whose broad phase skipped the leaves' refresh."""
     return tamias_load(&_skipped_refreshes)
 
 def _count_keys_in_narrow(on=None):
-    """Whether a soft step on one thread, with no handler and sleeping off,
-    gathers its bodies before the narrow phase and counts the colouring
-    keys there (and, given `on`, set it first; for tests, which check that
+    """Whether a soft step on one thread, with no handler that runs before
+    the solve, gathers its bodies before the narrow phase and counts the
+    colouring keys there (and, given `on`, set it first; for tests, which check that
     the count's own pass gives the same)."""
-    global _count_in_narrow
-    if on is not None:
-        _count_in_narrow = bool(on)
-    return bool(_count_in_narrow)
+    return _switch(&_count_in_narrow, on)
 
 def _narrow_counts_count():
     """Steps so far (all spaces) whose keys were counted in the narrow phase."""
@@ -4415,19 +4408,13 @@ def _keep_arbiter_threads(on=None):
     bodies until it knows whether this step's are the same (and, given `on`,
     set it first; for tests, which check that unthreading every step, as
     Munk2D, changes nothing)."""
-    global _keep_threads
-    if on is not None:
-        _keep_threads = bool(on)
-    return bool(_keep_threads)
+    return _switch(&_keep_threads, on)
 
 def _mass_ratio_blocks(on=None):
     """Whether light bodies' contacts are solved as blocks (SoftFindBlocks;
     and, given `on`, set it first; for benchmarks/mass_ratios.py, which
     measures the scenes with and without them in one process)."""
-    global _use_blocks
-    if on is not None:
-        _use_blocks = bool(on)
-    return bool(_use_blocks)
+    return _switch(&_use_blocks, on)
 
 def _count_at_least_zero(count):
     # (The test switches' counts.)
@@ -4477,10 +4464,7 @@ def _link_sleeping_components(on=None):
     """Whether a soft step with sleeping on may tell by union-find that no
     component would fall asleep, and skip the flood fill (and, given `on`,
     set it first; for tests, which check that it changes nothing)."""
-    global _link_components
-    if on is not None:
-        _link_components = bool(on)
-    return bool(_link_components)
+    return _switch(&_link_components, on)
 
 def _linked_components_count():
     """Steps so far (all spaces) that skipped the flood fill."""
@@ -4491,10 +4475,7 @@ def _keep_sleeping_islands(on=None):
     components where its contact graph is the same, instead of the
     union-find (and, given `on`, set it first; for tests, which check that
     it changes nothing)."""
-    global _keep_islands
-    if on is not None:
-        _keep_islands = bool(on)
-    return bool(_keep_islands)
+    return _switch(&_keep_islands, on)
 
 def _kept_islands_count():
     """Steps so far (all spaces) whose kept components skipped the flood
@@ -4517,10 +4498,7 @@ def _pile_load_estimates(on=None):
     """Whether the soft step works out tall piles' loads from their weights
     (SoftEstimateLoads; and, given `on`, set it first; for tests and
     benchmarks, which compare with the step before it)."""
-    global _estimate_loads
-    if on is not None:
-        _estimate_loads = bool(on)
-    return bool(_estimate_loads)
+    return _switch(&_estimate_loads, on)
 
 def _kept_threads_count():
     """Steps so far (all spaces) whose arbiters were left threaded."""

@@ -189,7 +189,9 @@ cdef void cpSpaceWakeComponent(cpSpace *space, cpBody *root) noexcept nogil
 # and puts idle components to sleep. `links` (NULL, or room for twice
 # space.dynamicBodies.num + 2 ints) lets it skip the flood fill where it
 # can tell that no component would sleep (the soft step; it overwrites the
-# bodies' solverIndex), and returns whether it did.
+# bodies' solverIndex); `islands` (NULL, or room for three times that, 3 n +
+# 3) keeps the components between steps (see _keepIslands). Returns 0, or
+# 1 where it skipped the flood fill, 2 where the kept components did.
 cdef int cpSpaceProcessComponents(cpSpace *space, cpFloat dt, int count, bint threaded,
                                   int *links, int *islands) noexcept nogil
 
