@@ -2039,37 +2039,63 @@ _SWITCH_SCENES["post_solve_kicks"] = lambda: _kicking_piles("post_solve")
                                    "rain_persistence_1", "persistence_toggled", "post_solve_kicks",
                                    "sleepy_pile", "sleepy_pyramid", "sleepy_joints",
                                    "sleepy_islands", "sleepy_persistence_toggled"])
-def test_keys_counted_in_the_narrow_phase_change_nothing(scene):
-    # On one thread, with no handler acting before the solve, the bodies
-    # are gathered before the narrow phase and each
-    # arbiter's colouring key is found as the narrow phase accepts it: the
-    # same keys, so the same bits, as the count's own pass. (At collision
-    # persistence 0, which `persistence_toggled` switches to and from, the
-    # cache's filter empties the step's arbiters after the narrow phase:
-    # those steps count in the pass. With sleeping on, a step whose
-    # components stage wakes a body or puts one to sleep counts in the pass
-    # too: the slots moved.)
+@pytest.mark.parametrize("threads", [1, 2])
+def test_keys_counted_in_the_narrow_phase_change_nothing(scene, threads):
+    # With no handler acting before the solve, the bodies are gathered
+    # before the narrow phase and each arbiter's colouring key is found
+    # there: on one thread as the narrow phase accepts it, on two as a
+    # thread updates it (at the pair's index, moved to the arbiter's by the
+    # pass that accepts them in order). The same keys, so the same bits, as
+    # the count's own pass. (At collision persistence 0, which
+    # `persistence_toggled` switches to and from, the cache's filter empties
+    # the step's arbiters after the narrow phase: those steps count in the
+    # pass. With sleeping on, a step whose components stage wakes a body or
+    # puts one to sleep counts in the pass too: the slots moved.)
     from tamias2d import _soft_step
-    _assert_switch_changes_nothing(_switch_scene(scene), _soft_step._count_keys_in_narrow,
-                                   _soft_step._narrow_counts_count,
-                                   "no step counted its keys in the narrow phase: nothing was tested")
+    base = _switch_scene(scene)
+
+    def build():
+        s = base()
+        if threads == 2:
+            s.threaded = True
+            s.threads = 2
+        return s
+    pool = _soft_step._threaded_min_contacts_set(0)
+    try:
+        _assert_switch_changes_nothing(build, _soft_step._count_keys_in_narrow,
+                                       _soft_step._narrow_counts_count,
+                                       "no step counted its keys in the narrow phase: nothing was tested")
+    finally:
+        _soft_step._threaded_min_contacts_set(pool)
 
 
 @pytest.mark.parametrize("phase", ["separate", "begin", "pre_solve"])
-def test_keys_are_not_counted_early_where_a_callback_may_change_a_body(phase):
+@pytest.mark.parametrize("threads", [1, 2])
+def test_keys_are_not_counted_early_where_a_callback_may_change_a_body(phase, threads):
     # A separate callback runs after the narrow phase (the arbiter cache's
     # filter), begin and pre-solve ones in it: each may change a body that
     # an early gather would already have read. Those steps gather after
     # them, as before: the same bits with the switch on or off.
     from tamias2d import _soft_step
+
+    def build():
+        s = _kicking_piles(phase)
+        if threads == 2:
+            s.threaded = True
+            s.threads = 2
+        return s
     assert _soft_step._count_keys_in_narrow()
+    pool = _soft_step._threaded_min_contacts_set(0)
     try:
-        _soft_step._count_keys_in_narrow(False)
-        off = _state_after(lambda: _kicking_piles(phase), 120)
+        try:
+            _soft_step._count_keys_in_narrow(False)
+            off = _state_after(build, 120)
+        finally:
+            _soft_step._count_keys_in_narrow(True)
+        before = _soft_step._narrow_counts_count()
+        on = _state_after(build, 120)
     finally:
-        _soft_step._count_keys_in_narrow(True)
-    before = _soft_step._narrow_counts_count()
-    on = _state_after(lambda: _kicking_piles(phase), 120)
+        _soft_step._threaded_min_contacts_set(pool)
     assert _soft_step._narrow_counts_count() == before
     assert on == off
 

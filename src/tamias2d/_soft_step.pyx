@@ -287,6 +287,7 @@ cdef struct SoftContext:
     bint keysInNarrow         # ... and the bodies gathered before it: it also counts each arbiter it accepts (SoftKeyAccepted)
     int keyed                 # ... how many (the first of space.arbiters)
     int keySeen               # ... their SOFT_SEEN_* bits
+    volatile long narrowSeen[2]   # ... on threads, the pairs' keys' SOFT_SEEN_RATIO and _ELASTIC (SoftNarrowPhase)
     volatile long elastic     # a contact has restitution (set by SoftCountRange)
     volatile long customVelocity  # a body has its own velocity_func (SoftGatherRange)
     volatile long customPosition  # ... position_func
@@ -565,6 +566,7 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
     cdef cpContact *dest
     cdef cpShape *a
     cdef cpShape *b
+    cdef int seen = 0
     for i in range(begin, end):
         p = &ctx.pairs[i]
         a = <cpShape *>p.a
@@ -655,6 +657,10 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
                     ctx.pairArbiters[i] = c.arb
                     if cpArbiterIsSolved(c.arb, c.solid):
                         ctx.touching[i] |= SOFT_PAIR_ACCEPTED
+                        if ctx.keysInNarrow:
+                            # Its key, at the pair's index: the serial
+                            # pass moves it to its arbiter's (SoftKeyMoved).
+                            seen |= SoftCountContact(ctx, c.arb, i)
                     if c.info.arr[0].bias < SOFT_YOUNG_AGE:
                         ctx.touching[i] |= SOFT_PAIR_YOUNG
                     if ctx.placedInNarrow:
@@ -665,6 +671,10 @@ cdef void SoftNarrowPhase(SoftContext *ctx, int begin, int end) noexcept nogil:
                 elif c.updated:
                     c.arb.contacts = NULL
                     c.arb.count = 0
+    if seen & SOFT_SEEN_RATIO:
+        tamias_store(&ctx.narrowSeen[0], 1)
+    if seen & SOFT_SEEN_ELASTIC:
+        tamias_store(&ctx.narrowSeen[1], 1)
 
 cdef inline void SoftPrefetchArbiter(cpSpace *space, SoftCandidate *c) noexcept nogil:
     cdef cpHashSet *arbs = space.cachedArbiters
@@ -745,8 +755,8 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
     cdef cpSpace *space = ctx.space
     cdef unsigned long long known, walked
     cdef cpPairCollector collector
-    cdef int i, n, flags, stamped
-    cdef bint inside
+    cdef int i, n, flags, stamped, keyAt
+    cdef bint inside, keys
     cpSpacePushFreshContactBuffer(space)
     # (The reach first: the tree's boxes of kinematic and bullet shapes,
     # which the shapes' update tests, take it in. It reads velocities only.)
@@ -796,7 +806,8 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
         space.softScratch.pairCount = ctx.pairCount
     n = ctx.pairCount
     ctx.acceptInNarrow = ctx.updateInNarrow and not ctx.threaded
-    ctx.keysInNarrow = ctx.keysInNarrow and ctx.acceptInNarrow and SoftReserveKeys(ctx, n)
+    keys = ctx.keysInNarrow
+    ctx.keysInNarrow = 0
     ctx.candidates = NULL
     if not ctx.acceptInNarrow:
         ctx.candidates = <SoftCandidate *>_reserve(space, SOFT_SCRATCH_CANDIDATES, n,
@@ -817,6 +828,13 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
             ctx.destinations = NULL     # (out of memory: the flag is up; the pass below)
         else:
             ctx.placedInNarrow = 1
+    # Keys counted as the narrow phase accepts each arbiter (on one thread),
+    # or as it updates each (on threads, where the pass after it accepts
+    # them in order).
+    ctx.keysInNarrow = (keys and (ctx.acceptInNarrow or ctx.placedInNarrow)
+                        and SoftReserveKeys(ctx, n))
+    tamias_store(&ctx.narrowSeen[0], 0)
+    tamias_store(&ctx.narrowSeen[1], 0)
     SoftRun(ctx, SOFT_TASK_NARROW, 0, n, 0)
     SoftProfileMark(SOFT_STAGE_NARROW_PHASE)
     if ctx.acceptInNarrow:
@@ -849,7 +867,10 @@ cdef void SoftCollide(SoftContext *ctx) noexcept nogil:
             ctx.youngPairs += 1
         stamped += 1
         if flags & SOFT_PAIR_ACCEPTED:
+            keyAt = space.arbiters.num
             cpArrayPush(space.arbiters, ctx.pairArbiters[i])   # (failing: the flag is up)
+            if ctx.keysInNarrow:
+                SoftKeyMoved(ctx, i, keyAt)
     # (Each was cached and not stamped in this step: cpSpaceStampArbiter.)
     space.arbitersStamped += stamped
 
@@ -1430,9 +1451,11 @@ cdef bint SoftPrepareContacts(SoftContext *ctx, cpFloat prev_dt) noexcept nogil:
     tamias_store(&ctx.ratioPairs, 0)
     ctx.blockBodyCount = 0
     if ctx.keysInNarrow:
-        # (Counted already: SoftKeyAccepted.)
+        # (Counted already: SoftKeyAccepted, and on threads SoftNarrowPhase.)
         tamias_add(&_narrow_counts, 1)
-        SoftStoreSeen(ctx, ctx.keySeen)
+        SoftStoreSeen(ctx, ctx.keySeen
+                      | (SOFT_SEEN_RATIO if tamias_load(&ctx.narrowSeen[0]) else 0)
+                      | (SOFT_SEEN_ELASTIC if tamias_load(&ctx.narrowSeen[1]) else 0))
     else:
         SoftRun(ctx, SOFT_TASK_COUNT, 0, arbiters.num, 0)
     if tamias_load(&ctx.emptyArbiter):
@@ -1853,7 +1876,7 @@ cdef bint SoftKeysMayBeCounted(SoftContext *ctx) noexcept nogil:
     # step's arbiters after the narrow phase: the count skips them. With
     # sleeping on, the components stage between may wake a body or put one
     # to sleep, which moves the slots: SoftKeysHold then refuses the keys.)
-    if not (_count_in_narrow and not ctx.threaded and space.collisionPersistence > 0
+    if not (_count_in_narrow and space.collisionPersistence > 0
             and (space.sleepTimeThreshold != INFINITY or space.sleepingComponents.num == 0)
             and ctx.updateInNarrow and not cpSpaceHasHandlers(space, 0, 0, 0, 1)):
         return 0
@@ -1881,6 +1904,24 @@ cdef void SoftKeyAccepted(SoftContext *ctx, int n) noexcept nogil:
         return
     ctx.contactSource[n] = n
     ctx.keySeen |= SoftCountContact(ctx, arb, n)
+    ctx.keyed = n + 1
+
+cdef inline void SoftKeyMoved(SoftContext *ctx, int i, int n) noexcept nogil:
+    # On threads: pair i's arbiter, just put on the step's list as arbiter
+    # n, was counted by the narrow phase at index i (SoftNarrowPhase): its
+    # key moves to n. (n <= i, and the pairs are taken in order, so no key
+    # of a later pair is overwritten.)
+    cdef cpArray *arbiters = ctx.space.arbiters
+    if n != ctx.keyed or arbiters.num != n + 1:
+        ctx.keysInNarrow = 0    # (the count's pass)
+        return
+    if i != n:
+        ctx.colorKeys[n] = ctx.colorKeys[i]
+        if ctx.estimating:
+            ctx.loadHeld[n] = ctx.loadHeld[i]
+            ctx.loadOther[n] = ctx.loadOther[i]
+            ctx.loadLift[n] = ctx.loadLift[i]
+    ctx.contactSource[n] = n
     ctx.keyed = n + 1
 
 cdef inline bint SoftKeysHold(SoftContext *ctx) noexcept nogil:
