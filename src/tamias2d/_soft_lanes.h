@@ -77,7 +77,9 @@ typedef struct {
     int points;                           /* 1 or 2: every lane's manifold has that many */
     int ia[SOFT_LANES], ib[SOFT_LANES];   /* SoftState slots, as byte offsets (SOFT_AT) */
     unsigned char wa[SOFT_LANES], wb[SOFT_LANES];   /* write the body back (movable, not slot 0) */
-    char pad0[64 - 4 - 2 * 4 * SOFT_LANES - 2 * SOFT_LANES];
+    unsigned char inner[SOFT_LANES];      /* the contact is inside a web (SoftInnerContact; an
+                                           * empty slot counts as inside): soft_lane_inner */
+    char pad0[64 - 4 - 2 * 4 * SOFT_LANES - 3 * SOFT_LANES];
     double iA[SOFT_LANES], iB[SOFT_LANES];    /* (the masses are the bodies' SoftState's) */
     double nx[SOFT_LANES], ny[SOFT_LANES];
     double rAx[2][SOFT_LANES], rAy[2][SOFT_LANES], rBx[2][SOFT_LANES], rBy[2][SOFT_LANES];
@@ -179,6 +181,52 @@ static inline void soft_fetch_lane_for_warm_start(const SoftLanes *c) {
         SOFT_FETCH_READ(p + k);
 }
 
+/* How many of the lane's slots are inside a web. (One byte a slot, each
+ * written by whichever thread packs that contact.) */
+static inline int soft_lane_inner(const SoftLanes *c) {
+    int k, count = 0;
+    for (k = 0; k < SOFT_LANES; k++)
+        count += c->inner[k] != 0;
+    return count;
+}
+
+/* A pass that leaves out the inner contacts (skipInner) and meets a lane of
+ * both kinds solves the lane with the inner slots' sides not written back,
+ * then puts back what it wrote of their impulses: each contact is solved,
+ * or not, as in a lane of its own kind (the contacts of a lane share no
+ * body), so how the contacts fell into lanes changes nothing. */
+typedef struct {
+    unsigned char wa[SOFT_LANES], wb[SOFT_LANES];
+    double normal[2][SOFT_LANES], tangent[2][SOFT_LANES], maxNormal[2][SOFT_LANES];
+} SoftInnerHeld;
+
+static inline void soft_lane_hold_inner(SoftLanes *c, const SoftLaneLinks *x, SoftInnerHeld *h) {
+    int k;
+    memcpy(h->wa, c->wa, sizeof(h->wa));
+    memcpy(h->wb, c->wb, sizeof(h->wb));
+    memcpy(h->normal, c->normalImpulse, sizeof(h->normal));
+    memcpy(h->tangent, c->tangentImpulse, sizeof(h->tangent));
+    memcpy(h->maxNormal, x->maxNormalImpulse, sizeof(h->maxNormal));
+    for (k = 0; k < SOFT_LANES; k++)
+        if (c->inner[k])
+            c->wa[k] = c->wb[k] = 0;
+}
+
+static inline void soft_lane_release_inner(SoftLanes *c, SoftLaneLinks *x, const SoftInnerHeld *h) {
+    int j, k;
+    for (k = 0; k < SOFT_LANES; k++) {
+        if (!c->inner[k])
+            continue;
+        for (j = 0; j < 2; j++) {
+            c->normalImpulse[j][k] = h->normal[j][k];
+            c->tangentImpulse[j][k] = h->tangent[j][k];
+            x->maxNormalImpulse[j][k] = h->maxNormal[j][k];
+        }
+    }
+    memcpy(c->wa, h->wa, sizeof(h->wa));
+    memcpy(c->wb, h->wb, sizeof(h->wb));
+}
+
 static inline void SoftLanesClear(SoftLanes *c, SoftLaneLinks *x, int k) {
     /* Lane k (of a colour's last, part-filled lane) takes no impulse: it
      * joins the immovable slot 0 to itself, its rows far apart, and writes
@@ -188,6 +236,7 @@ static inline void SoftLanesClear(SoftLanes *c, SoftLaneLinks *x, int k) {
     int p;
     c->ia[k] = c->ib[k] = 0;
     c->wa[k] = c->wb[k] = 0;
+    c->inner[k] = 1;
     x->src[k] = -1;
     x->dst[k] = 0;
     c->iA[k] = c->iB[k] = 1.0;
@@ -516,23 +565,24 @@ static inline void SoftLanesWarmStart(SoftLanes *c, int n, SoftState *st, int fe
  * totals after solving it, as the substep's last pass does; trackMax: keep
  * the points' largest normal impulses (for restitution); fetch: fetch the
  * bodies' states SOFT_FETCH_AHEAD lanes ahead (a pile too big for the
- * cache). */
+ * cache); skipInner: pass over the inner lanes (a relax pass that only the
+ * others take). */
 static inline void SoftLanesSolve(SoftLanes *c, SoftLaneLinks *x, int n, SoftState *st,
                                   const SoftLaneBiasRates *rates,
                                   double inv_h, double pushOut, int useBias, int accumulate,
-                                  int trackMax, int fetch) {
+                                  int trackMax, int fetch, int skipInner) {
 #if SOFT_HAVE_AVX2
     if (soft_lanes_path == SOFT_PATH_AVX2) {
-        soft_solve_range_avx2(c, x, n, st, rates, inv_h, pushOut, useBias, accumulate, trackMax, fetch);
+        soft_solve_range_avx2(c, x, n, st, rates, inv_h, pushOut, useBias, accumulate, trackMax, fetch, skipInner);
         return;
     }
 #endif
 #if SOFT_HAVE_SIMD
     if (soft_lanes_path == SOFT_PATH_SIMD) {
-        soft_solve_range_simd(c, x, n, st, rates, inv_h, pushOut, useBias, accumulate, trackMax, fetch);
+        soft_solve_range_simd(c, x, n, st, rates, inv_h, pushOut, useBias, accumulate, trackMax, fetch, skipInner);
         return;
     }
 #endif
-    soft_solve_range_scalar(c, x, n, st, rates, inv_h, pushOut, useBias, accumulate, trackMax, fetch);
+    soft_solve_range_scalar(c, x, n, st, rates, inv_h, pushOut, useBias, accumulate, trackMax, fetch, skipInner);
 }
 

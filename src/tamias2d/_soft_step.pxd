@@ -62,9 +62,17 @@ cdef const cpFloat SOFT_PUSH_OUT_PER_SLOP = 600.0
 cdef const cpFloat SOFT_SPECULATIVE_PER_SLOP = 4.0
 # Relax passes (rigid, no bias) per substep. Box2D runs one; a second one
 # takes out the push-out velocity that one Gauss-Seidel pass leaves in big
-# pyramids and under heavy bodies, where it shows as jitter.
+# pyramids and under heavy bodies, where it shows as jitter, and holds
+# stacks, arches and card houses that a nudge would rock over. Inside a web
+# of contacts (a contact whose bodies are each immovable or in more than
+# SOFT_INNER_CONTACTS contacts: the inside of a pyramid of touching boxes or
+# of a pile) the extra pass is needed only in a step's first substep, where
+# the narrow phase's new separations come in (SoftRelax). (More than three
+# contacts was the same for the hard cases, but let one card house of the
+# sweep in benchmarks/card_house_sweep.py fall.)
 cdef enum:
     SOFT_RELAX_ITERATIONS = 2
+    SOFT_INNER_CONTACTS = 4
 # Restitution passes at most (SoftApplyRestitution), Chipmunk's default
 # iterations; a pass after the first applies only impulses above this
 # fraction of the step's largest bounce (times the point's mass).
@@ -183,6 +191,7 @@ cdef extern from "_soft_lanes.h" nogil:
         cpFloat qc, qs
     ctypedef struct SoftLanes:
         int points
+        unsigned char inner[SOFT_LANES]
         int ia[SOFT_LANES]
         int ib[SOFT_LANES]
         unsigned char wa[SOFT_LANES]
@@ -219,7 +228,8 @@ cdef extern from "_soft_lanes.h" nogil:
     void SoftLanesWarmStart(SoftLanes *c, int n, SoftState *st, int fetch)
     void SoftLanesSolve(SoftLanes *c, SoftLaneLinks *x, int n, SoftState *st,
                         const SoftLaneBiasRates *rates, cpFloat inv_h,
-                        cpFloat pushOut, int useBias, int accumulate, int trackMax, int fetch)
+                        cpFloat pushOut, int useBias, int accumulate, int trackMax, int fetch,
+                        int skipInner)
     enum: SOFT_PATH_SCALAR, SOFT_PATH_SIMD, SOFT_PATH_AVX2
     void SoftLanesInit()
     int SoftLanesPathAvailable(int path)

@@ -24,7 +24,8 @@ Beyond Box2D's soft step (docs/stability.md measures each):
     tall stack or a box under a heavier one stands at no depth, and a
     pyramid's bottom sinks half as deep as without;
   * two relax passes per substep (SOFT_RELAX_ITERATIONS) for two-point
-    manifolds; one-point contacts take part in the last only.
+    manifolds; one-point contacts take part in the last only, and so do
+    those inside a web after a step's first substep (SoftRelax).
 
 Layout: bodies are gathered into one contiguous SoftBody array (slot 0 is the
 immovable body), contacts into one contiguous SoftContact array, once per
@@ -445,6 +446,8 @@ cdef volatile long _overflow_total = 0
 # The same for the bodies' arbiter lists (SoftResetArbiters).
 cdef bint _keep_threads = 1
 cdef bint _use_blocks = 1
+# SoftRelaxSkipsInner (off only in tests, which compare).
+cdef bint _skip_inner = 1
 # SOFT_PRELOAD_TILT, but for tests and benchmarks (_chain_preload_tilt).
 cdef cpFloat _preload_tilt = SOFT_PRELOAD_TILT
 cdef volatile long _kept_threads = 0
@@ -2596,14 +2599,15 @@ cdef inline bint SoftGroupsFinish(SoftContext *ctx) noexcept nogil:
     return tamias_load(&ctx.elastic) == 0
 
 cdef inline void SoftGroupPass(SoftContext *ctx, const int *lanes, const int *ends,
-                               bint useBias, bint accumulate, bint trackMax) noexcept nogil:
+                               bint useBias, bint accumulate, bint trackMax,
+                               bint skipInner) noexcept nogil:
     # A biased or relax pass over a group's colours, colour c's lanes from
     # lanes[c] to ends[c] (SoftSolve's and SoftRelax's SoftLanesSolve).
     cdef int c
     for c in range(SOFT_GRAPH_COLORS):
         SoftLanesSolve(&ctx.lanes[lanes[c]], &ctx.laneLinks[lanes[c]], ends[c] - lanes[c], ctx.states,
                        &ctx.laneBiasRates, ctx.inv_h, ctx.pushOut, useBias, accumulate, trackMax,
-                       ctx.fetchAhead)
+                       ctx.fetchAhead, skipInner)
 
 cdef void SoftSubstepGroup(SoftContext *ctx, int g, bint marks) noexcept nogil:
     # Group g's substeps: cpSoftStep's loop without joints over the group's
@@ -2638,7 +2642,7 @@ cdef void SoftSubstepGroup(SoftContext *ctx, int g, bint marks) noexcept nogil:
                                    ctx.fetchAhead)
             if marks:
                 SoftProfileMark(SOFT_STAGE_WARM_START)
-            SoftGroupPass(ctx, lanes, lanes + 1, 1, 0, trackMax)
+            SoftGroupPass(ctx, lanes, lanes + 1, 1, 0, trackMax, 0)
             if marks:
                 SoftProfileMark(SOFT_STAGE_SOLVE)
         for i in range(first, end):
@@ -2647,8 +2651,8 @@ cdef void SoftSubstepGroup(SoftContext *ctx, int g, bint marks) noexcept nogil:
             SoftProfileMark(SOFT_STAGE_INTEGRATE)
         if contacts:
             for r in range(SOFT_RELAX_ITERATIONS - 1):
-                SoftGroupPass(ctx, lanes, pairEnd, 0, 0, trackMax)
-            SoftGroupPass(ctx, lanes, lanes + 1, 0, 1, trackMax)
+                SoftGroupPass(ctx, lanes, pairEnd, 0, 0, trackMax, SoftRelaxSkipsInner(ctx, k))
+            SoftGroupPass(ctx, lanes, lanes + 1, 0, 1, trackMax, 0)
             if marks:
                 SoftProfileMark(SOFT_STAGE_RELAX)
     if SoftGroupsFinish(ctx):
@@ -2752,6 +2756,8 @@ cdef void SoftPackContacts(SoftContext *ctx, const int *order, int begin, int en
             continue
         sc = &ctx.contacts[n] if keep else &local
         SoftPrepareContact(ctx, n, sc)
+        ctx.lanes[slot // SOFT_LANES].inner[slot % SOFT_LANES] = (
+            SoftInnerContact(&ctx.bodies[sc.ia]) and SoftInnerContact(&ctx.bodies[sc.ib]))
         if slot % SOFT_LANES == 0:
             # (Slot 0 of a lane is never empty: its contact says the kind.)
             ctx.lanes[slot // SOFT_LANES].points = ctx.colorKeys[n].kind + 1
@@ -3513,19 +3519,37 @@ cdef void SoftSolveContact(SoftContext *ctx, SoftContact *sc, bint useBias) noex
         sb.vy = vby
         sb.w = wb
 
-cdef void SoftRelax(SoftContext *ctx, bint last) noexcept nogil:
+cdef inline bint SoftInnerContact(const SoftBody *body) noexcept nogil:
+    # A contact's side inside a web: immovable (slot 0), or a body in more
+    # than SOFT_INNER_CONTACTS contacts (counted by the colouring). A
+    # contact is inner when both of its sides are.
+    return body.body == NULL or body.contacts > SOFT_INNER_CONTACTS
+
+cdef inline bint SoftRelaxSkipsInner(SoftContext *ctx, int substep) noexcept nogil:
+    # Whether substep k's extra relax pass leaves the inner lanes out: after
+    # the step's first substep, unless a mass-ratio block is solved (its
+    # rows converge from pass to pass through the lanes around it).
+    return _skip_inner and substep > 0 and ctx.blockBodyCount == 0
+
+cdef void SoftRelax(SoftContext *ctx, bint last, bint skipInner) noexcept nogil:
     # A relax pass: SoftSolve without bias. The substep's last also adds
     # the impulse the substep applied, its accumulated impulse after the
     # relax (the warm start re-applies the previous one), to the step's.
     # The passes before the last leave out the one-point lanes: the extra
     # pass is for the two-point manifolds that carry stacks, pyramids and
     # arches; for points alone (circles, corners) it cost as much and
-    # changed no hard case's outcome (docs/stability.md).
+    # changed no hard case's outcome (docs/stability.md). With skipInner
+    # they leave out the inner contacts too (SoftRelaxSkipsInner): inside
+    # a web, after the first substep, the extra pass changed no hard case's
+    # outcome either, nor those of the stacks, arches and card houses of
+    # benchmarks/ (stacks and arches have no inner contact), and it is most
+    # of a large pyramid's lanes.
     cdef int i, j
     cdef SoftContact *sc
     if not last:
         for i in range(SOFT_GRAPH_COLORS):
-            SoftRun(ctx, SOFT_TASK_SOLVE, ctx.colorLanes[i], ctx.colorPairEnd[i], 0)
+            SoftRun(ctx, SOFT_TASK_RELAX_OUTER if skipInner else SOFT_TASK_SOLVE,
+                    ctx.colorLanes[i], ctx.colorPairEnd[i], 0)
         SoftSolveOverflow(ctx, 0)
         return
     for i in range(SOFT_GRAPH_COLORS):
@@ -3936,6 +3960,7 @@ cdef enum:
     SOFT_TASK_WARM_START
     SOFT_TASK_SOLVE
     SOFT_TASK_RELAX_ACCUMULATE
+    SOFT_TASK_RELAX_OUTER     # a relax pass over the lanes that are not inner (SoftRelax)
     SOFT_TASK_NARROW
     SOFT_TASK_UNPACK
     SOFT_TASK_STORE
@@ -3991,14 +4016,14 @@ cdef void SoftRunRange(SoftContext *ctx, int task, int begin, int end, bint flag
         SoftIntegratePositions(ctx, begin, end)
     elif task == SOFT_TASK_WARM_START:
         SoftLanesWarmStart(&ctx.lanes[begin], end - begin, ctx.states, ctx.fetchAhead)
-    elif task == SOFT_TASK_SOLVE:
+    elif task == SOFT_TASK_SOLVE or task == SOFT_TASK_RELAX_OUTER:
         SoftLanesSolve(&ctx.lanes[begin], &ctx.laneLinks[begin], end - begin, ctx.states,
                        &ctx.laneBiasRates, ctx.inv_h, ctx.pushOut, flag, 0, tamias_load(&ctx.elastic) != 0,
-                       ctx.fetchAhead)
+                       ctx.fetchAhead, task == SOFT_TASK_RELAX_OUTER)
     elif task == SOFT_TASK_RELAX_ACCUMULATE:
         SoftLanesSolve(&ctx.lanes[begin], &ctx.laneLinks[begin], end - begin, ctx.states,
                        &ctx.laneBiasRates, ctx.inv_h, ctx.pushOut, 0, 1, tamias_load(&ctx.elastic) != 0,
-                       ctx.fetchAhead)
+                       ctx.fetchAhead, 0)
     elif task == SOFT_TASK_NARROW:
         SoftNarrowPhase(ctx, begin, end)
     elif task == SOFT_TASK_UNPACK:
@@ -4074,7 +4099,8 @@ cdef void SoftRun(SoftContext *ctx, int task, int begin, int end, bint flag) noe
     if not ctx.threaded or end - begin <= chunk:
         SoftRunRange(ctx, task, begin, end, flag)
         return
-    if (task == SOFT_TASK_WARM_START or task == SOFT_TASK_SOLVE or task == SOFT_TASK_RELAX_ACCUMULATE) \
+    if (task == SOFT_TASK_WARM_START or task == SOFT_TASK_SOLVE or task == SOFT_TASK_RELAX_ACCUMULATE
+            or task == SOFT_TASK_RELAX_OUTER) \
             and end - begin < SOFT_SHARED_PASS_MIN_LANES and _threaded_min_contacts > 0:
         # (Not in the tests' mode, _threaded_min_contacts_set(0), which
         # shares every stage it can.)
@@ -4323,7 +4349,7 @@ cdef bint cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
                 SoftJointsRefresh(&ctx)
                 for r in range(SOFT_RELAX_ITERATIONS):
                     SoftJointsSolve(&ctx, 0)
-                    SoftRelax(&ctx, r == SOFT_RELAX_ITERATIONS - 1)
+                    SoftRelax(&ctx, r == SOFT_RELAX_ITERATIONS - 1, SoftRelaxSkipsInner(&ctx, k))
                 SoftProfileMark(SOFT_STAGE_RELAX)
         if ctx.groupCount > 0 and SoftGroupsFinish(&ctx):
             pass    # (each group finished its own: SoftSubstepGroup)
@@ -4406,6 +4432,12 @@ def _arbiter_guesses(on=None):
     phase's memory of it (and, given `on`, set it first; for tests, which
     check that without the guesses every step is the same)."""
     return _switch(&_use_guesses, on)
+
+def _relax_skips_inner_lanes(on=None):
+    """Whether a substep's extra relax pass leaves out the lanes inside a
+    web after the step's first substep (SoftRelaxSkipsInner); with `on`,
+    set it (for tests, which compare)."""
+    return _switch(&_skip_inner, on)
 
 def _keep_broad_phase_pairs(on=None):
     """Whether the broad phase takes a step's pairs from its last walk over
