@@ -37,24 +37,9 @@ import against_box2d  # noqa: E402
 
 
 def large_pyramid(base=100):
-    """Box2D's large_pyramid benchmark: base 100 (5,050 boxes 1x1) on a
-    200x2 ground, gravity 10, friction 0.6 (the ground's 1: tamias2d
-    multiplies the two), in metres: Box2D's linear slop as collision_slop,
+    """Box2D's large_pyramid benchmark (tests/scenes.py touching_pyramid),
     as benchmarks/against_box2d.py builds it."""
-    space = tamias2d.Space()
-    space.gravity = 0, -10
-    space.collision_slop = 0.005
-    ground = tamias2d.Poly(space.static_body, [(-100, -2), (100, -2), (100, 0), (-100, 0)])
-    ground.friction = 1.0
-    space.add(ground)
-    for i in range(base):
-        for j in range(i, base):
-            body = tamias2d.Body(1.0, tamias2d.moment_for_box(1.0, (1.0, 1.0)))
-            body.position = (i + 1) / 2 + (j - i) - base / 2, i + 0.5
-            box = tamias2d.Poly.create_box(body, (1.0, 1.0))
-            box.friction = 0.6
-            space.add(body, box)
-    return space
+    return scenes.touching_pyramid(tamias2d, base)
 
 
 def box2d_scene(name):

@@ -94,6 +94,27 @@ def pyramid(mod, rows=20, size=20.0):
     return space
 
 
+def touching_pyramid(mod, base=100):
+    """Box2D's large_pyramid benchmark (base 100: 5,050 boxes 1x1, side by
+    side and touching, so that a box inside it is in six contacts) on a
+    200x2 ground, gravity 10, friction 0.6 (the ground's 1: the engines
+    multiply the two), in metres: Box2D's linear slop as collision_slop."""
+    space = mod.Space()
+    space.gravity = 0, -10
+    space.collision_slop = 0.005
+    ground = mod.Poly(space.static_body, [(-100, -2), (100, -2), (100, 0), (-100, 0)])
+    ground.friction = 1.0
+    space.add(ground)
+    for i in range(base):
+        for j in range(i, base):
+            body = mod.Body(1.0, mod.moment_for_box(1.0, (1.0, 1.0)))
+            body.position = (i + 1) / 2 + (j - i) - base / 2, i + 0.5
+            box = mod.Poly.create_box(body, (1.0, 1.0))
+            box.friction = 0.6
+            space.add(body, box)
+    return space
+
+
 def vertical_stack(mod, count=10, size=20.0):
     """A single column of `count` boxes, mass 10, friction 0.3."""
     space = mod.Space()

@@ -752,23 +752,9 @@ def test_stacks_built_off_centre_stand():
 
 
 def _touching_pyramid(base=20):
-    # Box2D's pyramid (benchmarks/against_box2d.py): boxes 1 x 1 side by
-    # side, touching, so that a box inside it is in six contacts.
-    s = tamias2d.Space()
-    s.gravity = 0, -10
-    s.collision_slop = 0.005
-    half = max(40, base)
-    ground = tamias2d.Poly(s.static_body, [(-half, -2), (half, -2), (half, 0), (-half, 0)])
-    ground.friction = 1.0
-    s.add(ground)
-    for i in range(base):
-        for j in range(i, base):
-            body = tamias2d.Body(1.0, tamias2d.moment_for_box(1.0, (1.0, 1.0)))
-            body.position = (i + 1) / 2 + (j - i) - base / 2, i + 0.5
-            box = tamias2d.Poly.create_box(body, (1.0, 1.0))
-            box.friction = 0.6
-            s.add(body, box)
-    return s
+    # Box2D's pyramid: a box inside it is in six contacts.
+    import scenes
+    return scenes.touching_pyramid(tamias2d, base)
 
 
 def _blocks_beside_a_touching_pyramid():
@@ -812,14 +798,7 @@ def test_only_lanes_inside_a_web_leave_the_extra_relax_pass(scene):
     # touching boxes have them: not the same bits, so the rule acts; both
     # still stand (the hard cases below; `test_against_box2d.py`).
     from tamias2d import _soft_step
-    build = _INNER_SCENES[scene]
-    assert _soft_step._relax_skips_inner_lanes()
-    try:
-        _soft_step._relax_skips_inner_lanes(False)
-        off = _state_after(build, 240)
-    finally:
-        _soft_step._relax_skips_inner_lanes(True)
-    on = _state_after(build, 240)
+    off, on = _states_off_and_on(_INNER_SCENES[scene], _soft_step._relax_skips_inner_lanes)
     if scene in ("card_house", "touching_pyramid"):
         assert on != off
     else:
@@ -1694,14 +1673,7 @@ def test_arbiter_guesses_change_nothing(scene):
     # need not look it up; a guess gone stale (arbiter pooled and reused,
     # shapes removed, bodies asleep) must be caught, never used.
     from tamias2d import _soft_step
-    build = _switch_scene(scene)
-    assert _soft_step._arbiter_guesses()
-    try:
-        _soft_step._arbiter_guesses(False)
-        without = _state_after(build, 240)
-    finally:
-        _soft_step._arbiter_guesses(True)
-    with_guesses = _state_after(build, 240)
+    without, with_guesses = _states_off_and_on(_switch_scene(scene), _soft_step._arbiter_guesses)
     assert len(with_guesses) == len(without)
     for i, (g, w) in enumerate(zip(with_guesses, without)):
         assert repr(g) == repr(w), f"body {i}: {g} != {w}"
@@ -1866,6 +1838,29 @@ _SWITCH_SCENES = {"sleepy_pile": _sleepy_pile, "sleepy_pyramid": _sleepy_pyramid
                   "rain_persistence_0": lambda: _short_memory_rain(0),
                   "persistence_toggled": lambda: _persistence_toggled(False),
                   "sleepy_persistence_toggled": lambda: _persistence_toggled(True)}
+
+
+def _states_off_and_on(build, switch, steps=240):
+    # The scene's state after `steps` steps with a soft-step switch (on by
+    # default) off, then on.
+    assert switch()
+    try:
+        switch(False)
+        off = _state_after(build, steps)
+    finally:
+        switch(True)
+    return off, _state_after(build, steps)
+
+
+def _on_threads(build, threads):
+    # `build`'s scene in a threaded space of `threads` threads (1: as built).
+    def threaded():
+        s = build()
+        if threads > 1:
+            s.threaded = True
+            s.threads = threads
+        return s
+    return threaded
 
 
 def _switch_scene(name):
@@ -2095,14 +2090,7 @@ def test_taking_over_the_last_colouring_changes_nothing(scene, threads):
     # contact groups. The same bits as colouring every step, grouped
     # (groups of four contacts here) or not, on one thread or two.
     from tamias2d import _soft_step
-    base = _switch_scene(scene)
-
-    def build():
-        s = base()
-        if threads == 2:
-            s.threaded = True
-            s.threads = 2
-        return s
+    build = _on_threads(_switch_scene(scene), threads)
     groups = _soft_step._group_contacts_set(4)
     pool = _soft_step._threaded_min_contacts_set(0)
     try:
@@ -2149,14 +2137,7 @@ def test_keys_counted_in_the_narrow_phase_change_nothing(scene, threads):
     # pass. With sleeping on, a step whose components stage wakes a body or
     # puts one to sleep counts in the pass too: the slots moved.)
     from tamias2d import _soft_step
-    base = _switch_scene(scene)
-
-    def build():
-        s = base()
-        if threads == 2:
-            s.threaded = True
-            s.threads = 2
-        return s
+    build = _on_threads(_switch_scene(scene), threads)
     pool = _soft_step._threaded_min_contacts_set(0)
     try:
         _assert_switch_changes_nothing(build, _soft_step._count_keys_in_narrow,
@@ -2174,13 +2155,7 @@ def test_keys_are_not_counted_early_where_a_callback_may_change_a_body(phase, th
     # an early gather would already have read. Those steps gather after
     # them, as before: the same bits with the switch on or off.
     from tamias2d import _soft_step
-
-    def build():
-        s = _kicking_piles(phase)
-        if threads == 2:
-            s.threaded = True
-            s.threads = 2
-        return s
+    build = _on_threads(lambda: _kicking_piles(phase), threads)
     assert _soft_step._count_keys_in_narrow()
     pool = _soft_step._threaded_min_contacts_set(0)
     try:
