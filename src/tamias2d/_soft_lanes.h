@@ -565,8 +565,8 @@ static inline void SoftLanesWarmStart(SoftLanes *c, int n, SoftState *st, int fe
  * totals after solving it, as the substep's last pass does; trackMax: keep
  * the points' largest normal impulses (for restitution); fetch: fetch the
  * bodies' states SOFT_FETCH_AHEAD lanes ahead (a pile too big for the
- * cache); skipInner: pass over the inner lanes (a relax pass that only the
- * others take). */
+ * cache); skipInner: leave out the inner contacts (a relax pass that only
+ * the others take: soft_lane_hold_inner). */
 static inline void SoftLanesSolve(SoftLanes *c, SoftLaneLinks *x, int n, SoftState *st,
                                   const SoftLaneBiasRates *rates,
                                   double inv_h, double pushOut, int useBias, int accumulate,

@@ -3526,9 +3526,9 @@ cdef inline bint SoftInnerContact(const SoftBody *body) noexcept nogil:
     return body.body == NULL or body.contacts > SOFT_INNER_CONTACTS
 
 cdef inline bint SoftRelaxSkipsInner(SoftContext *ctx, int substep) noexcept nogil:
-    # Whether substep k's extra relax pass leaves the inner lanes out: after
-    # the step's first substep, unless a mass-ratio block is solved (its
-    # rows converge from pass to pass through the lanes around it).
+    # Whether this substep's extra relax pass leaves out the inner contacts:
+    # after the step's first substep, unless a mass-ratio block is solved
+    # (its rows converge from pass to pass through the contacts around it).
     return _skip_inner and substep > 0 and ctx.blockBodyCount == 0
 
 cdef void SoftRelax(SoftContext *ctx, bint last, bint skipInner) noexcept nogil:
