@@ -2270,6 +2270,32 @@ cdef bint SoftReuseColors(SoftContext *ctx, int *color) noexcept nogil:
     tamias_add(&_reused_colorings, 1)
     return 1
 
+# A colour's lanes by class, laid out in the order below: two-point
+# manifolds, those inside a web (SoftInnerContact: the extra relax pass
+# leaves them out after a step's first substep, so they fill lanes of their
+# own and whole lanes are passed over), then one-point ones. The contacts
+# of a colour share no movable body, so where a lane puts a contact changes
+# nothing but which lanes a pass can skip.
+cdef enum:
+    SOFT_LANE_POINT = 0           # (= the colouring key's kind)
+    SOFT_LANE_PAIR = 1
+    SOFT_LANE_INNER_PAIR = 2
+    SOFT_LANE_CLASSES = 3
+    # SoftFindGroups notes a contact's group and class as group << 2 | class.
+    SOFT_GROUP_CLASS_BITS = 2
+    SOFT_GROUP_CLASS_SLOTS = 4
+
+cdef inline int SoftLaneClassAt(int j) noexcept nogil:
+    # The class laid out j-th in a colour: pairs, inner pairs, points.
+    return (j + 1) % SOFT_LANE_CLASSES
+
+cdef inline int SoftLaneClass(SoftContext *ctx, const SoftColorKey *key) noexcept nogil:
+    # (Once every body's contacts are counted.)
+    if (key.kind == SOFT_LANE_PAIR and SoftInnerContact(&ctx.bodies[key.ia])
+            and SoftInnerContact(&ctx.bodies[key.ib])):
+        return SOFT_LANE_INNER_PAIR
+    return key.kind
+
 cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
     # Greedy colouring in arbiter order (so a copy continues alike): each
     # contact takes the first colour that holds neither of its movable
@@ -2279,15 +2305,15 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
     # colour of a pair is the lowest bit clear in both: no search.
     cdef cpSpace *space = ctx.space
     cdef int n = ctx.contactCount
-    cdef int i, c, col, a, b, total
+    cdef int i, j, c, col, a, b, total
     cdef uint32_t *used          # per body slot: the colours it is in
     cdef uint32_t taken, bit
     cdef int *color
     cdef SoftColorKey *key
     cdef SoftLanes *ln
-    cdef int counts[2][SOFT_GRAPH_COLORS]    # [points - 1][colour]
-    cdef int fill[2][SOFT_GRAPH_COLORS]
-    cdef int start[2][SOFT_GRAPH_COLORS]     # first lane of each kind
+    cdef int counts[SOFT_LANE_CLASSES][SOFT_GRAPH_COLORS]   # [class][colour]
+    cdef int fill[SOFT_LANE_CLASSES][SOFT_GRAPH_COLORS]
+    cdef int start[SOFT_LANE_CLASSES][SOFT_GRAPH_COLORS]    # first lane of each class
     cdef int kind, lanes, groups
     cdef bint grouping
     cdef int *parent = NULL
@@ -2302,7 +2328,7 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
     space.softScratch.colorsKnown = 0
     memset(used, 0, <size_t>ctx.bodyCount * sizeof(uint32_t))
     for c in range(SOFT_GRAPH_COLORS):
-        for kind in range(2):
+        for kind in range(SOFT_LANE_CLASSES):
             counts[kind][c] = 0
             fill[kind][c] = 0
     ctx.overflowCount = 0
@@ -2344,8 +2370,6 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
         if col == SOFT_GRAPH_COLORS:
             ctx.overflow[ctx.overflowCount] = i
             ctx.overflowCount += 1
-        else:
-            counts[key.kind][col] += 1
     tamias_add(&_overflow_total, ctx.overflowCount)
     # (Not where one pile holds nearly every body: one group, and the
     # contacts' pass to find it for nothing.)
@@ -2356,13 +2380,18 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
                 return 0
             SoftKeepColors(ctx)
             return 1
+    # (Counted now that every body's contacts are: SoftLaneClass.)
+    for i in range(n):
+        if color[i] != SOFT_GRAPH_COLORS:
+            counts[SoftLaneClass(ctx, &ctx.colorKeys[i])][color[i]] += 1
     total = 0
     for c in range(SOFT_GRAPH_COLORS):
         ctx.colorLanes[c] = total
-        for kind in range(1, -1, -1):
+        for j in range(SOFT_LANE_CLASSES):
+            kind = SoftLaneClassAt(j)
             start[kind][c] = total
             total += (counts[kind][c] + SOFT_LANES - 1) // SOFT_LANES
-        ctx.colorPairEnd[c] = start[0][c]
+        ctx.colorPairEnd[c] = start[SOFT_LANE_POINT][c]
     ctx.colorLanes[SOFT_GRAPH_COLORS] = total
     ctx.lanes = <SoftLanes *>_reserve_lines(space, SOFT_SCRATCH_LANES, total, sizeof(SoftLanes))
     ctx.laneLinks = <SoftLaneLinks *>_reserve(space, SOFT_SCRATCH_LANE_LINKS, total,
@@ -2377,14 +2406,14 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
         if c == SOFT_GRAPH_COLORS:
             color[i] = -1
             continue
-        kind = ctx.colorKeys[i].kind
+        kind = SoftLaneClass(ctx, &ctx.colorKeys[i])
         color[i] = start[kind][c] * SOFT_LANES + fill[kind][c]
         fill[kind][c] += 1
     ctx.contactSlots = color
     # The empty slots of each colour's last lane of a kind (they take no
     # impulse). (Each lane's kind is written by the contact in its slot 0.)
     for c in range(SOFT_GRAPH_COLORS):
-        for kind in range(2):
+        for kind in range(SOFT_LANE_CLASSES):
             lanes = (counts[kind][c] + SOFT_LANES - 1) // SOFT_LANES
             for i in range(counts[kind][c], lanes * SOFT_LANES):
                 SoftLanesClear(&ctx.lanes[start[kind][c] + i // SOFT_LANES],
@@ -2429,7 +2458,8 @@ cdef int *SoftReserveGroups(SoftContext *ctx) noexcept nogil:
     cdef int i
     cdef int *parent = <int *>_reserve(ctx.space, SOFT_SCRATCH_GROUPS,
                                        4 * bodies + 2 * n + 2 * (most + 2)
-                                       + most * (4 * SOFT_GRAPH_COLORS + 1), sizeof(int))
+                                       + most * ((3 + SOFT_GROUP_CLASS_SLOTS) * SOFT_GRAPH_COLORS + 1),
+                                       sizeof(int))
     if parent != NULL:
         for i in range(bodies):
             parent[i] = i
@@ -2459,7 +2489,8 @@ cdef inline bint SoftGroupJoin(int *parent, int *size, const SoftColorKey *key,
 cdef int SoftFindGroups(SoftContext *ctx, int *parent) noexcept nogil:
     # The components the colouring joined (SoftGroupJoin) put in groups of
     # about _group_contacts contacts, in arbiter order; each contact's
-    # group and kind noted (group * 2 + kind). Returns the number of groups.
+    # group and lane class noted (group * SOFT_GROUP_CLASS_SLOTS + class).
+    # Returns the number of groups.
     cdef int n = ctx.contactCount
     cdef int *rootGroup = parent + ctx.bodyCount
     cdef int *contactGroup = rootGroup + ctx.bodyCount
@@ -2477,7 +2508,7 @@ cdef int SoftFindGroups(SoftContext *ctx, int *parent) noexcept nogil:
             rootGroup[r] = current
         if rootGroup[r] == current:
             currentContacts += 1
-        contactGroup[i] = rootGroup[r] * 2 + key.kind
+        contactGroup[i] = rootGroup[r] * SOFT_GROUP_CLASS_SLOTS + SoftLaneClass(ctx, key)
     return current + 1
 
 cdef void SoftSortByKey(const int *key, int shift, int first, int n, int buckets, int *start,
@@ -2510,7 +2541,8 @@ cdef void SoftGroupLists(SoftContext *ctx, int groups) noexcept nogil:
     cdef int *bodyStart = bodyList + bodies
     cdef int *lanesOf = bodyStart + (groups + 2)
     cdef int *pairEnd = lanesOf + groups * (SOFT_GRAPH_COLORS + 1)
-    cdef int *contactList = pairEnd + groups * SOFT_GRAPH_COLORS + groups * 2 * SOFT_GRAPH_COLORS
+    cdef int *contactList = (pairEnd + groups * SOFT_GRAPH_COLORS
+                             + groups * SOFT_GROUP_CLASS_SLOTS * SOFT_GRAPH_COLORS)
     ctx.groupLanes = lanesOf
     ctx.groupPairEnd = pairEnd
     ctx.groupBodies = bodyList
@@ -2532,11 +2564,11 @@ cdef bint SoftColorGroups(SoftContext *ctx, int *color, int groups) noexcept nog
     cdef int *bodyStart
     cdef int *lanesOf
     cdef int *pairEnd
-    cdef int *next                  # [group][kind][colour]
+    cdef int *next                  # [group][class][colour]
     cdef int *contactList
     cdef int *contactStart
     cdef int *bodyGroup
-    cdef int i, g, c, kind, idx, total, count, lanes, slot
+    cdef int i, j, g, c, kind, idx, total, count, lanes, slot
     SoftGroupLists(ctx, groups)
     bodyList = ctx.groupBodies
     bodyStart = ctx.groupBodyStart
@@ -2546,11 +2578,11 @@ cdef bint SoftColorGroups(SoftContext *ctx, int *color, int groups) noexcept nog
     contactList = ctx.groupContacts
     contactStart = ctx.groupContactStart
     bodyGroup = contactStart + (groups + 1)
-    memset(next, 0, <size_t>groups * 2 * SOFT_GRAPH_COLORS * sizeof(int))
+    memset(next, 0, <size_t>groups * SOFT_GROUP_CLASS_SLOTS * SOFT_GRAPH_COLORS * sizeof(int))
     for i in range(n):
         next[contactGroup[i] * SOFT_GRAPH_COLORS + color[i]] += 1
     total = 0
-    for idx in range(groups * 2 * SOFT_GRAPH_COLORS):
+    for idx in range(groups * SOFT_GROUP_CLASS_SLOTS * SOFT_GRAPH_COLORS):
         total += (next[idx] + SOFT_LANES - 1) // SOFT_LANES
     ctx.lanes = <SoftLanes *>_reserve_lines(ctx.space, SOFT_SCRATCH_LANES, total, sizeof(SoftLanes))
     ctx.laneLinks = <SoftLaneLinks *>_reserve(ctx.space, SOFT_SCRATCH_LANE_LINKS, total,
@@ -2563,10 +2595,11 @@ cdef bint SoftColorGroups(SoftContext *ctx, int *color, int groups) noexcept nog
     for g in range(groups):
         for c in range(SOFT_GRAPH_COLORS):
             lanesOf[g * (SOFT_GRAPH_COLORS + 1) + c] = total
-            for kind in range(1, -1, -1):
-                if kind == 0:
+            for j in range(SOFT_LANE_CLASSES):
+                kind = SoftLaneClassAt(j)
+                if kind == SOFT_LANE_POINT:
                     pairEnd[g * SOFT_GRAPH_COLORS + c] = total
-                idx = (g * 2 + kind) * SOFT_GRAPH_COLORS + c
+                idx = (g * SOFT_GROUP_CLASS_SLOTS + kind) * SOFT_GRAPH_COLORS + c
                 count = next[idx]
                 lanes = (count + SOFT_LANES - 1) // SOFT_LANES
                 for slot in range(count, lanes * SOFT_LANES):
@@ -2584,7 +2617,7 @@ cdef bint SoftColorGroups(SoftContext *ctx, int *color, int groups) noexcept nog
     # The contacts by group, for each group to prepare its own into its
     # lanes (SoftSubstepGroup); the bodies by group, the last list
     # (`groups`) the bodies in no contact.
-    SoftSortByKey(contactGroup, 1, 0, n, groups, contactStart, contactList)
+    SoftSortByKey(contactGroup, SOFT_GROUP_CLASS_BITS, 0, n, groups, contactStart, contactList)
     for i in range(1, bodies):
         g = rootGroup[SoftUnionRoot(parent, i)]
         bodyGroup[i] = g if g >= 0 else groups
@@ -3526,7 +3559,7 @@ cdef inline bint SoftInnerContact(const SoftBody *body) noexcept nogil:
     return body.body == NULL or body.contacts > SOFT_INNER_CONTACTS
 
 cdef inline bint SoftRelaxSkipsInner(SoftContext *ctx, int substep) noexcept nogil:
-    # Whether this substep's extra relax pass leaves out the inner contacts:
+    # Whether this substep's extra relax pass leaves out the inner lanes:
     # after the step's first substep, unless a mass-ratio block is solved
     # (its rows converge from pass to pass through the contacts around it).
     return _skip_inner and substep > 0 and ctx.blockBodyCount == 0
@@ -3539,11 +3572,12 @@ cdef void SoftRelax(SoftContext *ctx, bint last, bint skipInner) noexcept nogil:
     # pass is for the two-point manifolds that carry stacks, pyramids and
     # arches; for points alone (circles, corners) it cost as much and
     # changed no hard case's outcome (docs/stability.md). With skipInner
-    # they leave out the inner contacts too (SoftRelaxSkipsInner): inside
-    # a web, after the first substep, the extra pass changed no hard case's
-    # outcome either, nor those of the stacks, arches and card houses of
-    # benchmarks/ (stacks and arches have no inner contact), and it is most
-    # of a large pyramid's lanes.
+    # they leave out the inner lanes too (SoftRelaxSkipsInner, the
+    # colouring's SOFT_LANE_INNER_PAIR): inside a web, after the first
+    # substep, the extra pass changed no hard case's outcome either, nor
+    # those of the stacks, arches and card houses of benchmarks/ (stacks and
+    # arches have no inner contact), and it is most of a large pyramid's
+    # lanes.
     cdef int i, j
     cdef SoftContact *sc
     if not last:
