@@ -805,6 +805,22 @@ def test_only_lanes_inside_a_web_leave_the_extra_relax_pass(scene):
         assert on == off
 
 
+def test_inner_lanes_apart_or_held_back_give_the_same_bits():
+    # On one thread the colouring gives the inner contacts lanes of their
+    # own, which the extra relax pass skips; on the pool the lanes keep
+    # arbiter order and the pass holds a lane's inner contacts back
+    # (soft_lane_hold_inner). Each contact is solved, or not, alike: the
+    # same bits on one thread and two.
+    from tamias2d import _soft_step
+    pool = _soft_step._threaded_min_contacts_set(0)
+    try:
+        one = _state_after(_touching_pyramid, 240)
+        two = _state_after(_on_threads(_touching_pyramid, 2), 240)
+    finally:
+        _soft_step._threaded_min_contacts_set(pool)
+    assert one == two
+
+
 def test_box2d_large_pyramid_stands():
     # Box2D's large_pyramid benchmark (benchmarks/against_box2d.py, which
     # times it): 100 rows of touching boxes, 5,050 in all, at the soft

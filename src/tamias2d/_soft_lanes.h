@@ -181,15 +181,55 @@ static inline void soft_fetch_lane_for_warm_start(const SoftLanes *c) {
         SOFT_FETCH_READ(p + k);
 }
 
-/* Every contact of the lane is inside a web (one byte a slot, each written
- * by whichever thread packs that contact). The colouring gives the inner
- * two-point contacts lanes of their own (SoftLaneClass), so a relax pass
- * that leaves them out (skipInner) passes over whole lanes. */
+/* How many of the lane's slots are inside a web (one byte a slot, each
+ * written by whichever thread packs that contact). On one thread, and in
+ * contact groups, the colouring gives the inner two-point contacts lanes of
+ * their own (SoftLaneClass), and a relax pass that leaves them out
+ * (skipInner) passes over whole lanes. */
 static inline int soft_lane_inner(const SoftLanes *c) {
-    int k, all = 1;
+    int k, count = 0;
     for (k = 0; k < SOFT_LANES; k++)
-        all &= c->inner[k] != 0;
-    return all;
+        count += c->inner[k] != 0;
+    return count;
+}
+
+/* On the pool the lanes keep arbiter order, which keeps a region's bodies
+ * on one thread from pass to pass (the classes' lanes apart made both
+ * threads' warm start and biased pass 15-20% slower); there such a pass
+ * meets lanes of both kinds. It solves them with the inner slots' sides
+ * not written back, then puts back what it wrote of their impulses: each
+ * contact is solved, or not, as in a lane of its own kind (the contacts of
+ * a lane share no body), so the layout changes no bits. */
+typedef struct {
+    unsigned char wa[SOFT_LANES], wb[SOFT_LANES];
+    double normal[2][SOFT_LANES], tangent[2][SOFT_LANES], maxNormal[2][SOFT_LANES];
+} SoftInnerHeld;
+
+static inline void soft_lane_hold_inner(SoftLanes *c, const SoftLaneLinks *x, SoftInnerHeld *h) {
+    int k;
+    memcpy(h->wa, c->wa, sizeof(h->wa));
+    memcpy(h->wb, c->wb, sizeof(h->wb));
+    memcpy(h->normal, c->normalImpulse, sizeof(h->normal));
+    memcpy(h->tangent, c->tangentImpulse, sizeof(h->tangent));
+    memcpy(h->maxNormal, x->maxNormalImpulse, sizeof(h->maxNormal));
+    for (k = 0; k < SOFT_LANES; k++)
+        if (c->inner[k])
+            c->wa[k] = c->wb[k] = 0;
+}
+
+static inline void soft_lane_release_inner(SoftLanes *c, SoftLaneLinks *x, const SoftInnerHeld *h) {
+    int j, k;
+    for (k = 0; k < SOFT_LANES; k++) {
+        if (!c->inner[k])
+            continue;
+        for (j = 0; j < 2; j++) {
+            c->normalImpulse[j][k] = h->normal[j][k];
+            c->tangentImpulse[j][k] = h->tangent[j][k];
+            x->maxNormalImpulse[j][k] = h->maxNormal[j][k];
+        }
+    }
+    memcpy(c->wa, h->wa, sizeof(h->wa));
+    memcpy(c->wb, h->wb, sizeof(h->wb));
 }
 
 static inline void SoftLanesClear(SoftLanes *c, SoftLaneLinks *x, int k) {
@@ -530,8 +570,8 @@ static inline void SoftLanesWarmStart(SoftLanes *c, int n, SoftState *st, int fe
  * totals after solving it, as the substep's last pass does; trackMax: keep
  * the points' largest normal impulses (for restitution); fetch: fetch the
  * bodies' states SOFT_FETCH_AHEAD lanes ahead (a pile too big for the
- * cache); skipInner: pass over the inner lanes (a relax pass that only the
- * others take). */
+ * cache); skipInner: leave out the inner contacts (a relax pass that only
+ * the others take: whole lanes, or soft_lane_hold_inner). */
 static inline void SoftLanesSolve(SoftLanes *c, SoftLaneLinks *x, int n, SoftState *st,
                                   const SoftLaneBiasRates *rates,
                                   double inv_h, double pushOut, int useBias, int accumulate,

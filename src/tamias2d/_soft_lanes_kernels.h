@@ -234,11 +234,16 @@ static void SOFT_KERNEL(soft_warm_start_range)(SoftLanes *c, int n, SoftState *s
 #define SOFT_SOLVE_LOOP(bias, acc, track) do { \
         for (i = 0; i < n; i++) { \
             if (fetch && i + SOFT_FETCH_AHEAD < n \
-                    && !(skipInner && soft_lane_inner(&c[i + SOFT_FETCH_AHEAD]))) \
+                    && !(skipInner && soft_lane_inner(&c[i + SOFT_FETCH_AHEAD]) == SOFT_LANES)) \
                 soft_fetch_states(&c[i + SOFT_FETCH_AHEAD], st); \
-            if (skipInner && soft_lane_inner(&c[i])) \
+            inner = skipInner ? soft_lane_inner(&c[i]) : 0; \
+            if (inner == SOFT_LANES) \
                 continue; \
+            if (inner) \
+                soft_lane_hold_inner(&c[i], &x[i], &held); \
             SOFT_KERNEL(soft_solve)(&c[i], &x[i], st, rates, inv_h, pushOut, (bias), (acc), (track)); \
+            if (inner) \
+                soft_lane_release_inner(&c[i], &x[i], &held); \
         } \
     } while (0)
 
@@ -246,7 +251,8 @@ static void SOFT_KERNEL(soft_solve_range)(SoftLanes *c, SoftLaneLinks *x, int n,
                                           const SoftLaneBiasRates *rates, double inv_h,
                                           double pushOut, int useBias, int accumulate,
                                           int trackMax, int fetch, int skipInner) {
-    int i;
+    int i, inner;
+    SoftInnerHeld held;
     if (useBias) {
         if (trackMax) SOFT_SOLVE_LOOP(1, 0, 1); else SOFT_SOLVE_LOOP(1, 0, 0);
     } else if (accumulate) {

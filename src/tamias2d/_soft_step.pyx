@@ -289,6 +289,7 @@ cdef struct SoftContext:
     int keyed                 # ... how many (the first of space.arbiters)
     int keySeen               # ... their SOFT_SEEN_* bits
     volatile long narrowSeen[2]   # ... on threads, the pairs' keys' SOFT_SEEN_RATIO and _ELASTIC (SoftNarrowPhase)
+    bint innerApart           # the colouring gave the inner two-point contacts lanes of their own (SoftLaneClass)
     volatile long elastic     # a contact has restitution (set by SoftCountRange)
     volatile long customVelocity  # a body has its own velocity_func (SoftGatherRange)
     volatile long customPosition  # ... position_func
@@ -2171,6 +2172,7 @@ cdef struct SoftColorPlan:
     int groupSize
     int overflow
     int groups
+    bint innerApart           # SoftContext.innerApart when it was made
     int colorLanes[SOFT_GRAPH_COLORS + 1]
     int colorPairEnd[SOFT_GRAPH_COLORS]
 
@@ -2218,6 +2220,7 @@ cdef void SoftKeepColors(SoftContext *ctx) noexcept nogil:
     plan.groupSize = SoftGroupSize(ctx)
     plan.overflow = ctx.overflowCount
     plan.groups = ctx.groupCount
+    plan.innerApart = ctx.innerApart
     if ctx.groupCount == 0:
         # (Grouped, the groups' own lists say where their colours are.)
         for c in range(SOFT_GRAPH_COLORS):
@@ -2241,6 +2244,7 @@ cdef bint SoftReuseColors(SoftContext *ctx, int *color) noexcept nogil:
     cdef SoftColorKey *key
     if not (_reuse_colors and scratch.colorsKnown and plan.contacts == n
             and plan.bodies == ctx.bodyCount and plan.groupSize == SoftGroupSize(ctx)
+            and (plan.groups > 0 or plan.innerApart == SoftInnerApart(ctx))
             and scratch.buf[SOFT_SCRATCH_OLD_KEYS] != NULL
             and SoftSameColorKeys(<SoftColorKey *>scratch.buf[SOFT_SCRATCH_OLD_KEYS],
                                   ctx.colorKeys, n)):
@@ -2289,9 +2293,16 @@ cdef inline int SoftLaneClassAt(int j) noexcept nogil:
     # The class laid out j-th in a colour: pairs, inner pairs, points.
     return (j + 1) % SOFT_LANE_CLASSES
 
+cdef inline bint SoftInnerApart(SoftContext *ctx) noexcept nogil:
+    # Whether the inner contacts get lanes of their own outside contact
+    # groups: on one thread. On the pool the lanes keep arbiter order
+    # (soft_lane_hold_inner says why); within a group, where a thread keeps
+    # the whole group, they go apart too.
+    return not ctx.threaded
+
 cdef inline int SoftLaneClass(SoftContext *ctx, const SoftColorKey *key) noexcept nogil:
     # (Once every body's contacts are counted.)
-    if (key.kind == SOFT_LANE_PAIR and SoftInnerContact(&ctx.bodies[key.ia])
+    if (ctx.innerApart and key.kind == SOFT_LANE_PAIR and SoftInnerContact(&ctx.bodies[key.ia])
             and SoftInnerContact(&ctx.bodies[key.ib])):
         return SOFT_LANE_INNER_PAIR
     return key.kind
@@ -2374,6 +2385,7 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
     # (Not where one pile holds nearly every body: one group, and the
     # contacts' pass to find it for nothing.)
     if grouping and ctx.overflowCount == 0 and 10 * largest < 9 * (ctx.bodyCount - 1):
+        ctx.innerApart = 1
         groups = SoftFindGroups(ctx, parent)
         if groups >= 2:
             if not SoftColorGroups(ctx, color, groups):
@@ -2381,6 +2393,7 @@ cdef bint SoftColorContacts(SoftContext *ctx) noexcept nogil:
             SoftKeepColors(ctx)
             return 1
     # (Counted now that every body's contacts are: SoftLaneClass.)
+    ctx.innerApart = SoftInnerApart(ctx)
     for i in range(n):
         if color[i] != SOFT_GRAPH_COLORS:
             counts[SoftLaneClass(ctx, &ctx.colorKeys[i])][color[i]] += 1
@@ -4312,6 +4325,7 @@ cdef bint cpSoftStep(cpSpace *space, cpFloat dt) noexcept nogil:
     ctx.loadEstimates = NULL
     ctx.estimatePending = 0
     ctx.colored = 0
+    ctx.innerApart = 0
     tamias_store(&ctx.bodiesFinished, 0)
     tamias_store(&ctx.bodiesNonFinite, 0)
     space.collideMargin = SoftSpeculative(space)
