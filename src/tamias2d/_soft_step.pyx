@@ -2276,10 +2276,11 @@ cdef bint SoftReuseColors(SoftContext *ctx, int *color) noexcept nogil:
 
 # A colour's lanes by class, laid out in the order below: two-point
 # manifolds, those inside a web (SoftInnerContact: the extra relax pass
-# leaves them out after a step's first substep, so they fill lanes of their
-# own and whole lanes are passed over), then one-point ones. The contacts
-# of a colour share no movable body, so where a lane puts a contact changes
-# nothing but which lanes a pass can skip.
+# leaves them out after a step's first substep, so on one thread and in
+# contact groups they fill lanes of their own and whole lanes are passed
+# over: SoftInnerApart), then one-point ones. The contacts of a colour
+# share no movable body, so where a lane puts a contact changes nothing
+# but which lanes a pass can skip.
 cdef enum:
     SOFT_LANE_POINT = 0           # (= the colouring key's kind)
     SOFT_LANE_PAIR = 1
