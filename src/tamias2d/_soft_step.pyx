@@ -2288,7 +2288,7 @@ cdef enum:
     SOFT_LANE_CLASSES = 3
     # SoftFindGroups notes a contact's group and class as group << 2 | class.
     SOFT_GROUP_CLASS_BITS = 2
-    SOFT_GROUP_CLASS_SLOTS = 4
+    SOFT_GROUP_CLASS_SLOTS = 1 << SOFT_GROUP_CLASS_BITS
 
 cdef inline int SoftLaneClassAt(int j) noexcept nogil:
     # The class laid out j-th in a colour: pairs, inner pairs, points.
